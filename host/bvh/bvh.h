@@ -1,0 +1,31 @@
+// Binned-SAH BVH over triangles, flattened depth-first into BvhNode (cl/shared/types.h).
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "shared/types.h"
+
+namespace clbdpt {
+
+struct Bvh {
+    std::vector<BvhNode> nodes;
+    std::vector<uint32_t> order;  // order[i] = index (before reordering) of the i-th triangle
+    double build_seconds = 0;
+    int max_depth = 0;
+    int leaf_count = 0;
+};
+
+// Builds the BVH. Triangles must be finite (the scene loader guarantees it).
+Bvh build_bvh(const std::vector<Triangle>& triangles);
+
+// Reorders a per-triangle array to BVH order.
+template <typename T>
+std::vector<T> reorder(const std::vector<T>& items, const std::vector<uint32_t>& order) {
+    std::vector<T> out;
+    out.reserve(order.size());
+    for (uint32_t i : order) out.push_back(items[i]);
+    return out;
+}
+
+}  // namespace clbdpt
