@@ -24,6 +24,9 @@ typedef struct {
 #define BVH_META_COUNT_MASK 0xffffu
 #define BVH_META_AXIS_SHIFT 16
 
+/* Size of the traversal stack (cl/bvh.h); the builder keeps every leaf shallower than this. */
+#define BVH_MAX_DEPTH 64
+
 /* Triangle corners in BVH order; w is unused (kept 0). */
 typedef struct {
     clbdpt_float4 p0, p1, p2;

@@ -1,3 +1,255 @@
-// Placeholder until the CLI lands.
+// clbdpt command line: `clbdpt devices` and `clbdpt render SCENE [options]`.
+// Every failure ends as one line "clbdpt: error: ..." on stderr and exit status 1; nothing is
+// written unless the render finished.
+#include <unistd.h>
+
+#include <CLI/CLI.hpp>
+#include <chrono>
 #include <cstdio>
-int main() { std::puts("clbdpt: not yet"); return 1; }
+#include <fstream>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "device/opencl.h"
+#include "film/image_io.h"
+#include "render/aov.h"
+#include "render/device_scene.h"
+#include "render/features.h"
+#include "render/renderer.h"
+#include "scene/scene.h"
+#include "util/error.h"
+
+namespace clbdpt {
+namespace {
+
+struct RenderArgs {
+    std::string scene;
+    std::string output;
+    int spp = -1;
+    double time_budget = 0;
+    int max_depth = -1;
+    long long seed = -1;
+    std::string device;
+    int width = 0;
+    int height = 0;
+    std::string stats;
+    std::string integrator = "bdpt";
+    std::string aov;
+    bool verbose = false;
+    bool all_features = false;
+};
+
+std::string human_bytes(uint64_t b) {
+    char buf[64];
+    if (b >= (uint64_t(1) << 30)) std::snprintf(buf, sizeof buf, "%.1f GiB", double(b) / double(uint64_t(1) << 30));
+    else std::snprintf(buf, sizeof buf, "%.0f MiB", double(b) / double(1 << 20));
+    return buf;
+}
+
+int run_devices() {
+    std::vector<DeviceEntry> devices = list_devices();
+    if (devices.empty()) throw Error("no OpenCL device found (is pocl-opencl-icd installed?)");
+    std::printf("%-5s %-40s %-6s %5s  %-14s %s\n", "index", "name", "type", "units", "OpenCL C", "global memory");
+    for (const DeviceEntry& d : devices)
+        std::printf("%-5d %-40s %-6s %5u  %-14s %s   [%s]\n", d.index, d.name.c_str(), d.type.c_str(), d.compute_units,
+                    d.opencl_c_version.c_str(), human_bytes(d.global_memory).c_str(), d.platform_name.c_str());
+    return 0;
+}
+
+std::string default_output(const std::string& scene_path) {
+    std::string name = scene_path.substr(scene_path.find_last_of('/') + 1);
+    size_t dot = name.find_last_of('.');
+    if (dot != std::string::npos) name = name.substr(0, dot);
+    return name + ".png";
+}
+
+void write_text_atomically(const std::string& path, const std::string& text) {
+    const std::string tmp = path + ".tmp-" + std::to_string(::getpid());
+    {
+        std::ofstream out(tmp);
+        out << text;
+        if (!out) {
+            std::remove(tmp.c_str());
+            throw Error("cannot write '" + path + "'");
+        }
+    }
+    if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+        std::remove(tmp.c_str());
+        throw Error("cannot write '" + path + "'");
+    }
+}
+
+class ProgressBar {
+public:
+    explicit ProgressBar(bool enabled) : enabled_(enabled) {}
+    void update(int done, int total, double seconds, uint64_t pixels) {
+        if (!enabled_) return;
+        double sps = seconds > 0 ? double(done) * double(pixels) / seconds : 0;
+        char line[160];
+        if (total > 0) {
+            const int width = 30;
+            int filled = int(double(width) * done / total);
+            double eta = done > 0 ? seconds * (total - done) / done : 0;
+            std::snprintf(line, sizeof line, "\r[%.*s%*s] %d/%d spp  %.2f M samples/s  ETA %.0f s ", filled,
+                          "##############################", width - filled, "", done, total, sps * 1e-6, eta);
+        } else {
+            std::snprintf(line, sizeof line, "\r%d spp  %.2f M samples/s  %.1f s ", done, sps * 1e-6, seconds);
+        }
+        std::fputs(line, stderr);
+        std::fflush(stderr);
+        shown_ = true;
+    }
+    void finish() {
+        if (shown_) std::fputs("\n", stderr);
+    }
+
+private:
+    bool enabled_;
+    bool shown_ = false;
+};
+
+int run_render(const RenderArgs& args) {
+    Scene scene = load_scene(args.scene);
+    for (const std::string& w : scene.warnings) std::fprintf(stderr, "clbdpt: warning: %s\n", w.c_str());
+
+    const std::string output = args.output.empty() ? default_output(args.scene) : args.output;
+    if (!is_supported_output(output))
+        throw Error("unsupported output format '" + output + "' (use .exr, .png, .jpg or .tif)");
+    const int width = args.width > 0 ? args.width : scene.width;
+    const int height = args.height > 0 ? args.height : scene.height;
+
+    RenderOptions options;
+    options.integrator = parse_integrator(args.integrator);
+    options.spp = args.spp >= 0 ? args.spp : scene.render.spp;
+    options.time_budget = args.time_budget;
+    options.max_depth = args.max_depth >= 0 ? args.max_depth : scene.render.max_depth;
+    options.seed = args.seed >= 0 ? uint32_t(args.seed) : scene.render.seed;
+    options.all_features = args.all_features;
+    if (options.spp < 1 && options.time_budget <= 0) throw Error("--spp must be at least 1");
+    int aov = args.aov.empty() ? -1 : parse_aov(args.aov);
+
+    DeviceEntry entry = select_device(args.device);
+    DeviceContext device(entry);
+    DeviceScene ds = build_device_scene(scene, width, height);
+    if (args.verbose)
+        std::fprintf(stderr, "clbdpt: device %s; %zu triangles, %zu BVH nodes (%.3f s), %zu lights\n",
+                     entry.name.c_str(), ds.triangles.size(), ds.nodes.size(), ds.bvh_build_seconds, ds.lights.size());
+
+    ImageMetadata meta;
+    meta.strings.push_back({"clbdpt:scene", args.scene});
+    meta.strings.push_back({"clbdpt:device", entry.name});
+
+    if (aov >= 0) {
+        std::vector<float> rgb = render_aov(device, ds, aov);
+        meta.strings.push_back({"clbdpt:aov", args.aov});
+        write_image(output, width, height, rgb, meta);
+        std::fprintf(stderr, "clbdpt: %s AOV %dx%d, wrote %s\n", args.aov.c_str(), width, height, output.c_str());
+        return 0;
+    }
+
+    const bool tty = ::isatty(STDERR_FILENO);
+    ProgressBar bar(tty);
+    const uint64_t pixels = uint64_t(width) * uint64_t(height);
+    options.progress = [&](int done, int total, double seconds) { bar.update(done, total, seconds, pixels); };
+    Renderer renderer(device, ds, options);
+    if (args.verbose) {
+        std::string flags;
+        for (const std::string& d : renderer.stats().defines) flags += " -D" + d;
+        std::fprintf(stderr, "clbdpt: kernel flags:%s\nclbdpt: kernel %s in %.2f s\n", flags.c_str(),
+                     renderer.stats().program_from_cache ? "loaded from cache" : "built", renderer.stats().build_seconds);
+    }
+    Film film = renderer.render();
+    bar.finish();
+    const RenderStats& st = renderer.stats();
+
+    meta.strings.push_back({"clbdpt:integrator", integrator_name(options.integrator)});
+    meta.strings.push_back({"clbdpt:spp", std::to_string(film.spp)});
+    meta.strings.push_back({"clbdpt:max_depth", std::to_string(options.max_depth)});
+    meta.strings.push_back({"clbdpt:seed", std::to_string(options.seed)});
+    meta.strings.push_back({"clbdpt:seconds", std::to_string(st.seconds)});
+    write_image(output, width, height, film.image(), meta);
+
+    const double sps = st.seconds > 0 ? double(st.samples) / st.seconds : 0;
+    const double rps = st.seconds > 0 ? double(st.rays) / st.seconds : 0;
+    if (!args.stats.empty()) {
+        nlohmann::json j;
+        j["scene"] = args.scene;
+        j["output"] = output;
+        j["integrator"] = integrator_name(options.integrator);
+        j["width"] = width;
+        j["height"] = height;
+        j["spp"] = film.spp;
+        j["max_depth"] = options.max_depth;
+        j["seed"] = options.seed;
+        j["seconds"] = st.seconds;
+        j["samples"] = st.samples;
+        j["samples_per_second"] = sps;
+        j["rays"] = st.rays;
+        j["rays_per_second"] = rps;
+        j["kernel_build_seconds"] = st.build_seconds;
+        j["kernel_from_cache"] = st.program_from_cache;
+        j["kernel_defines"] = st.defines;
+        j["device"] = entry.name;
+        j["triangles"] = ds.triangles.size();
+        j["bvh_build_seconds"] = ds.bvh_build_seconds;
+        write_text_atomically(args.stats, j.dump(2) + "\n");
+    }
+    std::fprintf(stderr,
+                 "clbdpt: %s %d spp %dx%d in %.2f s: %.3f M samples/s, %.2f M rays/s; kernel %s %.2f s; wrote %s\n",
+                 integrator_name(options.integrator), film.spp, width, height, st.seconds, sps * 1e-6, rps * 1e-6,
+                 st.program_from_cache ? "cached" : "build", st.build_seconds, output.c_str());
+    return 0;
+}
+
+}  // namespace
+}  // namespace clbdpt
+
+int main(int argc, char** argv) {
+    using namespace clbdpt;
+    CLI::App app{"clbdpt: bidirectional path tracing in OpenCL kernels"};
+    app.require_subcommand(1);
+    app.set_version_flag("--version", "clbdpt 0.1");
+
+    app.add_subcommand("devices", "List every OpenCL platform and device");
+
+    RenderArgs args;
+    CLI::App* render = app.add_subcommand("render", "Render a scene (.json scene file or bare .obj)");
+    render->add_option("scene", args.scene, "Scene file (.json) or .obj")->required();
+    render->add_option("-o,--output", args.output,
+                       "Output image; format by extension: .exr (linear float), .png/.jpg/.tif (tonemapped sRGB). "
+                       "Default: <scene name>.png");
+    render->add_option("--spp", args.spp, "Samples per pixel (default: the scene's render.spp)");
+    render->add_option("--time", args.time_budget, "Render whole passes until this many seconds are spent");
+    render->add_option("--max-depth", args.max_depth, "Maximum scattering vertices per path (default: scene's)");
+    render->add_option("--seed", args.seed, "Random seed (default: the scene's render.seed)");
+    render->add_option("--device", args.device, "Device index or name substring (default: first GPU, else first CPU)");
+    render->add_option("--width", args.width, "Film width override")->check(CLI::PositiveNumber);
+    render->add_option("--height", args.height, "Film height override")->check(CLI::PositiveNumber);
+    render->add_option("--stats", args.stats, "Write a JSON summary (spp, seconds, samples/s, rays/s, ...)");
+    render->add_option("--integrator", args.integrator, "bdpt (all strategies), pt (s <= 1) or lt (t = 1)")
+        ->check(CLI::IsMember({"bdpt", "pt", "lt"}));
+    render->add_option("--aov", args.aov, "Debug render of the first hit: normal, albedo or depth")
+        ->check(CLI::IsMember({"normal", "albedo", "depth"}));
+    render->add_flag("--all-features", args.all_features, "Build the kernel with every feature enabled (benchmarks)");
+    render->add_flag("-v,--verbose", args.verbose, "Print device, BVH and kernel flags");
+
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::ParseError& e) {
+        return app.exit(e);
+    }
+    try {
+        if (app.got_subcommand("devices")) return run_devices();
+        return run_render(args);
+    } catch (const Error& e) {
+        std::fprintf(stderr, "clbdpt: error: %s\n", e.what());
+    } catch (const cl::Error& e) {
+        std::fprintf(stderr, "clbdpt: error: OpenCL: %s: %s\n", e.what(), cl_error_name(e.err()));
+    } catch (const std::bad_alloc&) {
+        std::fprintf(stderr, "clbdpt: error: out of host memory\n");
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "clbdpt: error: %s\n", e.what());
+    }
+    return 1;
+}

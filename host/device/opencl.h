@@ -45,6 +45,7 @@ struct ProgramBuild {
     double seconds = 0;      // wall time to get a usable program (build or cache load)
     bool from_cache = false;
     std::string options;     // the full option string given to the compiler
+    std::string build_log;   // the compiler's log (warnings), often empty
 };
 
 // One device's context, queue and program cache.

@@ -1,0 +1,45 @@
+/* Small vector helpers shared by every device header. */
+#ifndef CLBDPT_GEOMETRY_H
+#define CLBDPT_GEOMETRY_H
+
+#define PI_F 3.14159265358979323846f
+#define INV_PI_F 0.31830988618379067154f
+#define INV_4PI_F 0.07957747154594766788f
+
+inline float3 xyz(float4 v) { return (float3)(v.x, v.y, v.z); }
+
+inline float luminance(float3 c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
+
+inline int is_black(float3 c) { return c.x == 0.0f && c.y == 0.0f && c.z == 0.0f; }
+
+inline float length_squared(float3 v) { return dot(v, v); }
+
+/* Orthonormal basis around a unit vector (Duff et al. 2017, "Building an Orthonormal Basis,
+ * Revisited"): branch-free and exact for n = (0, 0, -1). */
+inline void coordinate_system(float3 n, float3* s, float3* t) {
+    float sign = n.z >= 0.0f ? 1.0f : -1.0f;
+    float a = -1.0f / (sign + n.z);
+    float b = n.x * n.y * a;
+    *s = (float3)(1.0f + sign * n.x * n.x * a, sign * b, -sign * n.x);
+    *t = (float3)(b, sign + n.y * n.y * a, -n.y);
+}
+
+/* A shading frame: local z is the shading normal. */
+typedef struct {
+    float3 s, t, n;
+} Frame;
+
+inline Frame frame_from_normal(float3 n) {
+    Frame f;
+    f.n = n;
+    coordinate_system(n, &f.s, &f.t);
+    return f;
+}
+
+inline float3 to_local(const Frame* f, float3 v) { return (float3)(dot(v, f->s), dot(v, f->t), dot(v, f->n)); }
+
+inline float3 from_local(const Frame* f, float3 v) { return f->s * v.x + f->t * v.y + f->n * v.z; }
+
+inline float3 face_forward(float3 n, float3 v) { return dot(n, v) < 0.0f ? -n : n; }
+
+#endif

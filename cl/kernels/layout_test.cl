@@ -1,0 +1,62 @@
+/* Reports the layout of every struct in shared/types.h as the device compiler sees it, so
+ * tests/device_layout_test.cpp can compare it with the host compiler's. The list of structs and
+ * fields below is the single list both sides use: the test includes this file as C++ (where the
+ * kernel itself is skipped) and expands the same list with the host's sizeof/alignof/offsetof. */
+#include "shared/types.h"
+
+/* S(T): the struct's size and alignment; F(T, f): the offset of field f. */
+#define CLBDPT_LAYOUT_LIST(S, F)                                                                  \
+    S(BvhNode) F(BvhNode, lo) F(BvhNode, offset) F(BvhNode, hi) F(BvhNode, meta)                  \
+    S(Triangle) F(Triangle, p0) F(Triangle, p1) F(Triangle, p2)                                   \
+    S(TriangleInfo) F(TriangleInfo, material) F(TriangleInfo, light) F(TriangleInfo, normals)     \
+        F(TriangleInfo, source_index)                                                             \
+    S(TriangleNormals) F(TriangleNormals, n0) F(TriangleNormals, n1) F(TriangleNormals, n2)       \
+    S(Material) F(Material, kd) F(Material, ks) F(Material, ke) F(Material, kind)                 \
+        F(Material, ior) F(Material, alpha) F(Material, pad0)                                     \
+    S(Light) F(Light, position) F(Light, direction) F(Light, emission) F(Light, kind)             \
+        F(Light, triangle) F(Light, cos_total_width) F(Light, cos_falloff_start) F(Light, area)   \
+        F(Light, select_pdf) F(Light, power) F(Light, pad0)                                       \
+    S(Camera) F(Camera, eye) F(Camera, right) F(Camera, up) F(Camera, forward)                    \
+        F(Camera, tan_half_width) F(Camera, tan_half_height) F(Camera, lens_radius)               \
+        F(Camera, focus_distance) F(Camera, width) F(Camera, height) F(Camera, film_area)         \
+        F(Camera, lens_area)                                                                      \
+    S(SceneInfo) F(SceneInfo, world_center) F(SceneInfo, light_count)                             \
+        F(SceneInfo, environment_light) F(SceneInfo, env_width) F(SceneInfo, env_height)          \
+        F(SceneInfo, triangle_count) F(SceneInfo, node_count) F(SceneInfo, pad0)                  \
+        F(SceneInfo, pad1)                                                                        \
+    S(RenderParams) F(RenderParams, width) F(RenderParams, height) F(RenderParams, first_pixel)   \
+        F(RenderParams, pixel_count) F(RenderParams, sample_index) F(RenderParams, seed)          \
+        F(RenderParams, max_depth) F(RenderParams, pad0)                                          \
+    S(SplatRecord) F(SplatRecord, r) F(SplatRecord, g) F(SplatRecord, b) F(SplatRecord, pixel)
+
+#ifdef CLBDPT_DEVICE
+
+/* OpenCL C 1.2 has no <stddef.h>; clang-based compilers (PoCL, most vendors) have the builtin. */
+#ifdef __clang__
+#define LAYOUT_OFFSETOF(T, f) ((int)__builtin_offsetof(T, f))
+#else
+#define LAYOUT_OFFSETOF(T, f) ((int)(size_t) & (((__private T*)0)->f))
+#endif
+
+/* A struct's alignment is the offset it gets after a single char. */
+#define LAYOUT_ALIGN_PROBE(T) \
+    typedef struct {          \
+        char c;               \
+        T t;                  \
+    } LayoutAlignProbe_##T;
+#define LAYOUT_NO_FIELD(T, f)
+CLBDPT_LAYOUT_LIST(LAYOUT_ALIGN_PROBE, LAYOUT_NO_FIELD)
+
+#define LAYOUT_EMIT_STRUCT(T)          \
+    out[++n] = (int)sizeof(T);         \
+    out[++n] = LAYOUT_OFFSETOF(LayoutAlignProbe_##T, t);
+#define LAYOUT_EMIT_FIELD(T, f) out[++n] = LAYOUT_OFFSETOF(T, f);
+
+/* Run as a single work item. out[0] = number of values that follow. */
+__kernel void report_layout(__global int* out) {
+    int n = 0;
+    CLBDPT_LAYOUT_LIST(LAYOUT_EMIT_STRUCT, LAYOUT_EMIT_FIELD)
+    out[0] = n;
+}
+
+#endif

@@ -1,0 +1,79 @@
+/* One BDPT sample per work item: a camera subpath through the item's pixel, a light subpath,
+ * and every enabled (s, t) connection between them (seed ch. 4-5). Camera-side contributions
+ * go to the item's own pixel (camera_out, whose w holds the number of rays the item traced); t = 1 contributions land elsewhere and are written
+ * as splat records in fixed slots (s - 1), which the host adds in slot order, so the image
+ * does not depend on the order the items ran in.
+ *
+ * Specialised per scene by -D flags (host/render/features.cpp): MAX_DEPTH, INTEGRATOR and
+ * HAS_* for the light, material and camera features present. */
+#include "connect.h"
+#include "walk.h"
+
+#ifndef MAX_DEPTH
+#define MAX_DEPTH 5
+#endif
+
+#define SPLAT_SLOTS (MAX_DEPTH + 1)
+
+__kernel void render_bdpt(__global const BvhNode* nodes, __global const Triangle* triangles,
+                          __global const TriangleInfo* infos, __global const TriangleNormals* normals,
+                          __global const Material* materials, __global const Light* lights,
+                          __global const float* light_cdf, __global const float4* env_texels,
+                          __global const float* env_distribution, Camera camera, SceneInfo info,
+                          RenderParams params, __global float4* camera_out, __global SplatRecord* splats) {
+    int gid = get_global_id(0);
+    if (gid >= params.pixel_count) return;
+    SceneData scene;
+    scene.nodes = nodes;
+    scene.triangles = triangles;
+    scene.infos = infos;
+    scene.normals = normals;
+    scene.materials = materials;
+    scene.lights = lights;
+    scene.light_cdf = light_cdf;
+    scene.env_texels = env_texels;
+    scene.env_distribution = env_distribution;
+    scene.camera = camera;
+    scene.info = info;
+    uint rays_traced = 0;
+    scene.rays_traced = &rays_traced;
+
+    int pixel = params.first_pixel + gid;
+    int px = pixel % params.width, py = pixel / params.width;
+    Rng rng = rng_init((uint)pixel, params.sample_index, params.seed);
+    float2 raster = (float2)((float)px, (float)py) + rng_next2(&rng);
+
+    PathVertex camera_path[MAX_DEPTH + 2];
+    PathVertex light_path[MAX_DEPTH + 1];
+    int n_camera = generate_camera_subpath(&scene, &rng, raster, MAX_DEPTH, camera_path);
+    int n_light = generate_light_subpath(&scene, &rng, MAX_DEPTH, light_path);
+    int light_is_area = n_light > 0 && lights[light_path[0].light].kind == LIGHT_AREA;
+
+    __global SplatRecord* my_splats = splats + (size_t)gid * SPLAT_SLOTS;
+    for (int k = 0; k < SPLAT_SLOTS; ++k) my_splats[k].pixel = -1;
+
+    float3 L = (float3)(0.0f);
+    for (int t = 1; t <= n_camera; ++t) {
+        for (int s = 0; s <= n_light; ++s) {
+            int depth = s + t - 2;
+            if (depth < 0 || depth > MAX_DEPTH) continue;
+            if (!strategy_enabled(s, t, light_is_area)) continue;
+            float2 splat_raster;
+            float weight;
+            float3 c = connect_bdpt(&scene, &rng, light_path, camera_path, s, t, &splat_raster, &weight);
+            if (is_black(c)) continue;
+            if (t == 1) {
+                int sx = min((int)splat_raster.x, params.width - 1);
+                int sy = min((int)splat_raster.y, params.height - 1);
+                __global SplatRecord* rec = &my_splats[s - 1];
+                rec->r = c.x;
+                rec->g = c.y;
+                rec->b = c.z;
+                rec->pixel = sy * params.width + sx;
+            } else {
+                L += c;
+            }
+        }
+    }
+    camera_out[gid] = (float4)(L.x, L.y, L.z, (float)rays_traced);
+}

@@ -1,0 +1,344 @@
+/* Light sources (seed ch. 1.3 and 6; pbrt-v3 lights/): one-sided triangle area lights, point,
+ * spot, directional and environment lights. For each: Sample_Li / Pdf_Li (reaching a scene
+ * point), Sample_Le / Pdf_Le (emitting a ray, origin and direction densities apart), and the
+ * emitted radiance. Lights are chosen by power (light_cdf).
+ *
+ * Measures: pdf_w is solid angle at the receiving point, pdf_pos is area on the light (or on
+ * the scene's bounding disk for directional and environment lights), pdf_dir is solid angle
+ * of the emitted direction. */
+#ifndef CLBDPT_LIGHTS_H
+#define CLBDPT_LIGHTS_H
+
+#include "geometry.h"
+#include "sampling.h"
+#include "scene.h"
+
+/* ---- Selection ------------------------------------------------------------------------- */
+
+inline int sample_light_index(const SceneData* scene, float u, float* select_pdf) {
+    int i = find_interval(scene->light_cdf, scene->info.light_count, u);
+    *select_pdf = scene->lights[i].select_pdf;
+    return i;
+}
+
+inline int light_is_delta_position(int kind) { return kind == LIGHT_POINT || kind == LIGHT_SPOT; }
+inline int light_is_delta_direction(int kind) { return kind == LIGHT_DIRECTIONAL; }
+inline int light_is_delta(int kind) { return light_is_delta_position(kind) || light_is_delta_direction(kind); }
+/* "Infinite" in pbrt's sense: the light sits at infinity and its vertex stores a direction. */
+inline int light_is_infinite(int kind) { return kind == LIGHT_ENVIRONMENT || kind == LIGHT_DIRECTIONAL; }
+
+/* ---- Area lights ----------------------------------------------------------------------- */
+
+inline float3 triangle_normal(__global const Triangle* tri) {
+    float3 p0 = xyz(tri->p0), p1 = xyz(tri->p1), p2 = xyz(tri->p2);
+    return normalize(cross(p1 - p0, p2 - p0));
+}
+
+inline float3 triangle_point(__global const Triangle* tri, float2 b) {
+    return xyz(tri->p0) * (1.0f - b.x - b.y) + xyz(tri->p1) * b.x + xyz(tri->p2) * b.y;
+}
+
+/* Radiance leaving an area light at a point with geometric normal n in direction w:
+ * one-sided, the front face is the counter-clockwise one. */
+inline float3 area_light_radiance(__global const Light* light, float3 n, float3 w) {
+    return dot(n, w) > 0.0f ? xyz(light->emission) : (float3)(0.0f);
+}
+
+/* ---- Spot falloff ---------------------------------------------------------------------- */
+
+/* pbrt-v3 SpotLight::Falloff: 1 inside the inner cone, 0 outside the outer one, a quartic ramp
+ * between. w is the unit direction away from the light. */
+inline float spot_falloff(__global const Light* light, float3 w) {
+    float cos_theta = dot(w, xyz(light->direction));
+    if (cos_theta < light->cos_total_width) return 0.0f;
+    if (cos_theta >= light->cos_falloff_start) return 1.0f;
+    float delta = (cos_theta - light->cos_total_width) / (light->cos_falloff_start - light->cos_total_width);
+    return (delta * delta) * (delta * delta);
+}
+
+/* ---- Environment map distribution ------------------------------------------------------
+ * env_distribution holds, for a W x H map (row 0 = the +y pole):
+ *   func      [W*H]       luminance * sin(theta) per texel, the density being sampled
+ *   cond_cdf  [H*(W+1)]   per-row CDFs over u
+ *   marg_cdf  [H+1]       CDF over rows
+ *   integral  [1]         mean of func = its integral over the unit square
+ * Directions: theta from +y (v = theta / pi), phi from +x toward +z (u = phi / 2 pi). */
+
+inline float3 env_direction(float2 uv) {
+    float theta = uv.y * PI_F, phi = uv.x * 2.0f * PI_F;
+    float sin_theta = sin(theta);
+    return (float3)(sin_theta * cos(phi), cos(theta), sin_theta * sin(phi));
+}
+
+inline float2 env_uv(float3 w) {
+    float theta = acos(clamp(w.y, -1.0f, 1.0f));
+    float phi = atan2(w.z, w.x);
+    if (phi < 0.0f) phi += 2.0f * PI_F;
+    return (float2)(phi * (0.5f * INV_PI_F), theta * INV_PI_F);
+}
+
+inline int env_texel(const SceneData* scene, float2 uv) {
+    int w = scene->info.env_width, h = scene->info.env_height;
+    int x = min((int)(uv.x * (float)w), w - 1);
+    int y = min((int)(uv.y * (float)h), h - 1);
+    return y * w + x;
+}
+
+/* Radiance arriving from direction w (unit, pointing away from the scene). */
+inline float3 environment_radiance(const SceneData* scene, float3 w) {
+    __global const Light* light = &scene->lights[scene->info.environment_light];
+    float3 scale = xyz(light->emission);
+#ifdef HAS_ENVIRONMENT_MAP
+    return scale * xyz(scene->env_texels[env_texel(scene, env_uv(w))]);
+#else
+    return scale;
+#endif
+}
+
+/* Solid-angle density with which the environment light samples direction w. */
+inline float environment_pdf_w(const SceneData* scene, float3 w) {
+#ifdef HAS_ENVIRONMENT_MAP
+    int width = scene->info.env_width, height = scene->info.env_height;
+    __global const float* func = scene->env_distribution;
+    float integral = func[width * height + height * (width + 1) + height + 1];
+    float2 uv = env_uv(w);
+    float sin_theta = sin(uv.y * PI_F);
+    if (sin_theta == 0.0f || integral == 0.0f) return 0.0f;
+    return (func[env_texel(scene, uv)] / integral) / (2.0f * PI_F * PI_F * sin_theta);
+#else
+    return INV_4PI_F;
+#endif
+}
+
+/* Samples a direction toward the environment; returns it with its solid-angle density. */
+inline float3 environment_sample_direction(const SceneData* scene, float2 u, float* pdf_w) {
+#ifdef HAS_ENVIRONMENT_MAP
+    int width = scene->info.env_width, height = scene->info.env_height;
+    __global const float* func = scene->env_distribution;
+    __global const float* cond = func + width * height;
+    __global const float* marg = cond + height * (width + 1);
+    float integral = marg[height + 1];
+    int y = find_interval(marg, height, u.y);
+    float dv = (u.y - marg[y]) / (marg[y + 1] - marg[y]);
+    __global const float* row = cond + y * (width + 1);
+    int x = find_interval(row, width, u.x);
+    float du = (u.x - row[x]) / (row[x + 1] - row[x]);
+    float2 uv = (float2)(((float)x + du) / (float)width, ((float)y + dv) / (float)height);
+    float sin_theta = sin(uv.y * PI_F);
+    *pdf_w = 0.0f;
+    if (sin_theta == 0.0f || integral == 0.0f) return (float3)(0.0f, 1.0f, 0.0f);
+    *pdf_w = (func[y * width + x] / integral) / (2.0f * PI_F * PI_F * sin_theta);
+    return env_direction(uv);
+#else
+    *pdf_w = INV_4PI_F;
+    return sample_uniform_sphere(u);
+#endif
+}
+
+/* ---- Sample_Li: a point on the light as seen from ref ---------------------------------- */
+
+typedef struct {
+    float3 p;     /* point on the light; for infinite lights a point 2 radii away along wi */
+    float3 n;     /* geometric normal at p (area lights), else 0 */
+    float3 wi;    /* unit direction from ref toward the light */
+    float3 li;    /* incident radiance (area, environment) or its delta-light counterpart */
+    float pdf_w;  /* solid angle at ref; 1 for delta lights */
+} LightSample;
+
+inline int light_sample_li(const SceneData* scene, int index, float3 ref, float2 u, LightSample* ls) {
+    __global const Light* light = &scene->lights[index];
+    ls->n = (float3)(0.0f);
+    ls->li = (float3)(0.0f);
+    ls->pdf_w = 0.0f;
+    switch (light->kind) {
+#ifdef HAS_AREA_LIGHTS
+    case LIGHT_AREA: {
+        __global const Triangle* tri = &scene->triangles[light->triangle];
+        ls->p = triangle_point(tri, sample_uniform_triangle(u));
+        ls->n = triangle_normal(tri);
+        float3 d = ls->p - ref;
+        float d2 = length_squared(d);
+        if (d2 == 0.0f) return 0;
+        ls->wi = d * rsqrt(d2);
+        float cos_light = fabs(dot(ls->n, ls->wi));
+        if (cos_light == 0.0f) return 0;
+        ls->pdf_w = d2 / (cos_light * light->area);
+        ls->li = area_light_radiance(light, ls->n, -ls->wi);
+        break;
+    }
+#endif
+#if defined(HAS_POINT_LIGHTS) || defined(HAS_SPOT_LIGHTS)
+    case LIGHT_POINT:
+    case LIGHT_SPOT: {
+        ls->p = xyz(light->position);
+        float3 d = ls->p - ref;
+        float d2 = length_squared(d);
+        if (d2 == 0.0f) return 0;
+        ls->wi = d * rsqrt(d2);
+        ls->pdf_w = 1.0f;
+        float falloff = light->kind == LIGHT_SPOT ? spot_falloff(light, -ls->wi) : 1.0f;
+        ls->li = xyz(light->emission) * (falloff / d2);
+        break;
+    }
+#endif
+#ifdef HAS_DIRECTIONAL_LIGHTS
+    case LIGHT_DIRECTIONAL:
+        ls->wi = -xyz(light->direction);
+        ls->p = ref + ls->wi * (2.0f * scene_radius(scene));
+        ls->pdf_w = 1.0f;
+        ls->li = xyz(light->emission);
+        break;
+#endif
+#ifdef HAS_ENVIRONMENT
+    case LIGHT_ENVIRONMENT:
+        ls->wi = environment_sample_direction(scene, u, &ls->pdf_w);
+        ls->p = ref + ls->wi * (2.0f * scene_radius(scene));
+        ls->li = environment_radiance(scene, ls->wi);
+        break;
+#endif
+    default:
+        return 0;
+    }
+    return ls->pdf_w > 0.0f && !is_black(ls->li);
+}
+
+/* ---- Sample_Le: an emitted ray --------------------------------------------------------- */
+
+typedef struct {
+    float3 origin;
+    float3 dir;     /* unit */
+    float3 n;       /* normal at the origin used for the cosine in beta (pbrt's nLight) */
+    float3 le;      /* emitted radiance (area, environment) or intensity (point, spot) */
+    float pdf_pos;
+    float pdf_dir;
+} EmittedRay;
+
+inline void bounding_disk_point(const SceneData* scene, float3 w_toward_light, float2 u, float3* origin) {
+    float3 s_axis, t_axis;
+    coordinate_system(w_toward_light, &s_axis, &t_axis);
+    float2 cd = sample_concentric_disk(u);
+    float r = scene_radius(scene);
+    float3 p_disk = scene_center(scene) + r * (cd.x * s_axis + cd.y * t_axis);
+    *origin = p_disk + r * w_toward_light;
+}
+
+inline int light_sample_le(const SceneData* scene, int index, float2 u_pos, float2 u_dir, EmittedRay* er) {
+    __global const Light* light = &scene->lights[index];
+    er->le = (float3)(0.0f);
+    er->pdf_pos = 0.0f;
+    er->pdf_dir = 0.0f;
+    switch (light->kind) {
+#ifdef HAS_AREA_LIGHTS
+    case LIGHT_AREA: {
+        __global const Triangle* tri = &scene->triangles[light->triangle];
+        er->origin = triangle_point(tri, sample_uniform_triangle(u_pos));
+        er->n = triangle_normal(tri);
+        Frame f = frame_from_normal(er->n);
+        float3 w_local = sample_cosine_hemisphere(u_dir);
+        er->dir = from_local(&f, w_local);
+        er->pdf_pos = 1.0f / light->area;
+        er->pdf_dir = cosine_hemisphere_pdf(w_local.z);
+        er->le = area_light_radiance(light, er->n, er->dir);
+        break;
+    }
+#endif
+#ifdef HAS_POINT_LIGHTS
+    case LIGHT_POINT:
+        er->origin = xyz(light->position);
+        er->dir = sample_uniform_sphere(u_dir);
+        er->n = er->dir;
+        er->pdf_pos = 1.0f;
+        er->pdf_dir = INV_4PI_F;
+        er->le = xyz(light->emission);
+        break;
+#endif
+#ifdef HAS_SPOT_LIGHTS
+    case LIGHT_SPOT: {
+        er->origin = xyz(light->position);
+        Frame f = frame_from_normal(xyz(light->direction));
+        er->dir = from_local(&f, sample_uniform_cone(u_dir, light->cos_total_width));
+        er->n = er->dir;
+        er->pdf_pos = 1.0f;
+        er->pdf_dir = uniform_cone_pdf(light->cos_total_width);
+        er->le = xyz(light->emission) * spot_falloff(light, er->dir);
+        break;
+    }
+#endif
+#ifdef HAS_DIRECTIONAL_LIGHTS
+    case LIGHT_DIRECTIONAL: {
+        float3 w_light = -xyz(light->direction);
+        bounding_disk_point(scene, w_light, u_pos, &er->origin);
+        er->dir = xyz(light->direction);
+        er->n = er->dir;
+        float r = scene_radius(scene);
+        er->pdf_pos = 1.0f / (PI_F * r * r);
+        er->pdf_dir = 1.0f;
+        er->le = xyz(light->emission);
+        break;
+    }
+#endif
+#ifdef HAS_ENVIRONMENT
+    case LIGHT_ENVIRONMENT: {
+        float pdf_w;
+        float3 w_light = environment_sample_direction(scene, u_dir, &pdf_w);
+        bounding_disk_point(scene, w_light, u_pos, &er->origin);
+        er->dir = -w_light;
+        er->n = er->dir;
+        float r = scene_radius(scene);
+        er->pdf_pos = 1.0f / (PI_F * r * r);
+        er->pdf_dir = pdf_w;
+        er->le = environment_radiance(scene, w_light);
+        break;
+    }
+#endif
+    default:
+        return 0;
+    }
+    return er->pdf_pos > 0.0f && er->pdf_dir > 0.0f && !is_black(er->le);
+}
+
+/* Pdf_Le: densities with which light_sample_le would emit from `p` (normal n) along `dir`. */
+inline void light_pdf_le(const SceneData* scene, int index, float3 n, float3 dir, float* pdf_pos, float* pdf_dir) {
+    __global const Light* light = &scene->lights[index];
+    *pdf_pos = 0.0f;
+    *pdf_dir = 0.0f;
+    switch (light->kind) {
+    case LIGHT_AREA:
+        *pdf_pos = 1.0f / light->area;
+        *pdf_dir = cosine_hemisphere_pdf(dot(n, dir));
+        break;
+    case LIGHT_POINT:
+        *pdf_dir = INV_4PI_F;
+        break;
+    case LIGHT_SPOT:
+        *pdf_dir = dot(dir, xyz(light->direction)) >= light->cos_total_width ? uniform_cone_pdf(light->cos_total_width) : 0.0f;
+        break;
+    case LIGHT_DIRECTIONAL: {
+        float r = scene_radius(scene);
+        *pdf_pos = 1.0f / (PI_F * r * r);
+        break;
+    }
+    case LIGHT_ENVIRONMENT: {
+#ifdef HAS_ENVIRONMENT
+        float r = scene_radius(scene);
+        *pdf_pos = 1.0f / (PI_F * r * r);
+        *pdf_dir = environment_pdf_w(scene, -dir);
+#endif
+        break;
+    }
+    default:
+        break;
+    }
+}
+
+/* Pdf_Li for lights that can be found by direction alone (environment); area lights need the
+ * hit point, see light_pdf_li_area. Delta lights: 0 (they are never hit). */
+inline float light_pdf_li_area(__global const Light* light, float3 ref, float3 p, float3 n) {
+    float3 d = p - ref;
+    float d2 = length_squared(d);
+    if (d2 == 0.0f) return 0.0f;
+    float cos_light = fabs(dot(n, d * rsqrt(d2)));
+    return cos_light == 0.0f ? 0.0f : d2 / (cos_light * light->area);
+}
+
+#endif

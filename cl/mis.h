@@ -1,0 +1,74 @@
+/* Balance-heuristic MIS weight of strategy (s, t) by the ratio recursion of seed ch. 5
+ * (pbrt-v3 MISWeight; Veach 10.2): with p_i the density of generating the same path with i
+ * light vertices,
+ *     w_s = 1 / sum_i (p_i / p_s),
+ * and each ratio p_{i+1}/p_i needs only the forward and reverse densities of one vertex, so no
+ * product of densities is ever formed (a path's density can under- or overflow float at scene
+ * scales of 1e-4 or 1e4; ratios of neighbouring densities do not).
+ *
+ * The connection changes four densities (and may replace an endpoint with a freshly sampled
+ * vertex); pbrt assigns them in place for the duration of the call (ScopedAssignment). Here the
+ * endpoints are private copies and the four reverse densities are held in locals, so the
+ * subpaths themselves are never modified. */
+#ifndef CLBDPT_MIS_H
+#define CLBDPT_MIS_H
+
+#include "strategies.h"
+#include "vertex.h"
+
+/* A density of 0 marks a delta lobe or a vertex that cannot be sampled from that side; it
+ * must not zero the ratio product, so it counts as 1 (seed 5.4.2, remap0). Those strategies
+ * are excluded by the delta tests anyway. */
+inline float remap0(float f) { return f != 0.0f ? f : 1.0f; }
+
+/* sampled: the vertex the connection sampled afresh (camera vertex for t = 1, light vertex for
+ * s = 1), ignored otherwise. */
+inline float mis_weight(const SceneData* scene, const PathVertex* light_path, const PathVertex* camera_path,
+                        const PathVertex* sampled, int s, int t) {
+    PathVertex qs, pt; /* the connection's endpoints */
+    if (s > 0) qs = light_path[s - 1];
+    if (t > 0) pt = camera_path[t - 1];
+    if (t == 1) pt = *sampled;
+    else if (s == 1) qs = *sampled;
+    const PathVertex* qs_minus = s > 1 ? &light_path[s - 2] : 0;
+    const PathVertex* pt_minus = t > 1 ? &camera_path[t - 2] : 0;
+
+    /* Whether the path's emitter is an area light, for strategy_enabled's (1,1) rule. */
+    const PathVertex* emitter = s == 0 ? &pt : (s == 1 ? &qs : &light_path[0]);
+    int light_is_area = emitter->type == VERTEX_SURFACE || vertex_light_kind(scene, emitter) == LIGHT_AREA;
+
+    /* The endpoints are connected deterministically, so neither is a delta vertex of this
+     * path; their reverse densities and those of their predecessors follow the connection. */
+    float pt_pdf_rev = 0.0f, pt_minus_pdf_rev = 0.0f, qs_pdf_rev = 0.0f, qs_minus_pdf_rev = 0.0f;
+    if (t > 0)
+        pt_pdf_rev = s > 0 ? vertex_pdf(scene, &qs, qs_minus, &pt) : vertex_pdf_light_origin(scene, &pt, pt_minus);
+    if (pt_minus)
+        pt_minus_pdf_rev = s > 0 ? vertex_pdf(scene, &pt, &qs, pt_minus) : vertex_pdf_light(scene, &pt, pt_minus);
+    if (s > 0) qs_pdf_rev = vertex_pdf(scene, &pt, pt_minus, &qs);
+    if (qs_minus) qs_minus_pdf_rev = vertex_pdf(scene, &qs, &pt, qs_minus);
+
+    float sum_ri = 0.0f;
+    /* Camera side: r_i for strategies (s + t - i, i), i = t-1 .. 1. */
+    float ri = 1.0f;
+    for (int i = t - 1; i > 0; --i) {
+        float pdf_rev = i == t - 1 ? pt_pdf_rev : (i == t - 2 ? pt_minus_pdf_rev : camera_path[i].pdf_rev);
+        float pdf_fwd = i == t - 1 ? pt.pdf_fwd : camera_path[i].pdf_fwd;
+        int delta = i == t - 1 ? 0 : camera_path[i].delta;
+        ri *= remap0(pdf_rev) / remap0(pdf_fwd);
+        if (!delta && !camera_path[i - 1].delta && strategy_enabled(s + t - i, i, light_is_area)) sum_ri += ri;
+    }
+    /* Light side: r_i for strategies (i, s + t - i), i = s-1 .. 0. */
+    ri = 1.0f;
+    for (int i = s - 1; i >= 0; --i) {
+        float pdf_rev = i == s - 1 ? qs_pdf_rev : (i == s - 2 ? qs_minus_pdf_rev : light_path[i].pdf_rev);
+        float pdf_fwd = i == s - 1 ? qs.pdf_fwd : light_path[i].pdf_fwd;
+        int delta = i == s - 1 ? 0 : light_path[i].delta;
+        int delta_light_vertex = i > 0 ? light_path[i - 1].delta
+                                       : vertex_is_delta_light(scene, s == 1 ? &qs : &light_path[0]);
+        ri *= remap0(pdf_rev) / remap0(pdf_fwd);
+        if (!delta && !delta_light_vertex && strategy_enabled(i, s + t - i, light_is_area)) sum_ri += ri;
+    }
+    return 1.0f / (1.0f + sum_ri);
+}
+
+#endif

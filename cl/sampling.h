@@ -1,0 +1,65 @@
+/* Warps from the unit square to the domains the renderer samples, each with its density. */
+#ifndef CLBDPT_SAMPLING_H
+#define CLBDPT_SAMPLING_H
+
+#include "geometry.h"
+
+/* Shirley-Chiu concentric map: the unit square onto the unit disk, area-preserving. */
+inline float2 sample_concentric_disk(float2 u) {
+    float2 o = 2.0f * u - (float2)(1.0f, 1.0f);
+    if (o.x == 0.0f && o.y == 0.0f) return (float2)(0.0f, 0.0f);
+    float r, theta;
+    if (fabs(o.x) > fabs(o.y)) {
+        r = o.x;
+        theta = (PI_F / 4.0f) * (o.y / o.x);
+    } else {
+        r = o.y;
+        theta = (PI_F / 2.0f) - (PI_F / 4.0f) * (o.x / o.y);
+    }
+    return r * (float2)(cos(theta), sin(theta));
+}
+
+/* Cosine-weighted direction about +z; density cos(theta) / pi. */
+inline float3 sample_cosine_hemisphere(float2 u) {
+    float2 d = sample_concentric_disk(u);
+    float z = sqrt(fmax(0.0f, 1.0f - d.x * d.x - d.y * d.y));
+    return (float3)(d.x, d.y, z);
+}
+
+inline float cosine_hemisphere_pdf(float cos_theta) { return fmax(cos_theta, 0.0f) * INV_PI_F; }
+
+inline float3 sample_uniform_sphere(float2 u) {
+    float z = 1.0f - 2.0f * u.x;
+    float r = sqrt(fmax(0.0f, 1.0f - z * z));
+    float phi = 2.0f * PI_F * u.y;
+    return (float3)(r * cos(phi), r * sin(phi), z);
+}
+
+/* Uniform direction inside a cone about +z with the given cosine of its half angle. */
+inline float3 sample_uniform_cone(float2 u, float cos_max) {
+    float cos_theta = (1.0f - u.x) + u.x * cos_max;
+    float sin_theta = sqrt(fmax(0.0f, 1.0f - cos_theta * cos_theta));
+    float phi = u.y * 2.0f * PI_F;
+    return (float3)(cos(phi) * sin_theta, sin(phi) * sin_theta, cos_theta);
+}
+
+inline float uniform_cone_pdf(float cos_max) { return 1.0f / (2.0f * PI_F * (1.0f - cos_max)); }
+
+/* Uniform point on a triangle as barycentrics (b0, b1); b2 = 1 - b0 - b1. */
+inline float2 sample_uniform_triangle(float2 u) {
+    float su0 = sqrt(u.x);
+    return (float2)(1.0f - su0, u.y * su0);
+}
+
+/* Index i with cdf[i] <= u < cdf[i + 1] in a normalised CDF of n + 1 entries (cdf[0] = 0,
+ * cdf[n] = 1); entries of zero width are never returned for u in [0, 1). */
+inline int find_interval(__global const float* cdf, int n, float u) {
+    int lo = 0, hi = n; /* invariant: cdf[lo] <= u < cdf[hi] */
+    while (hi - lo > 1) {
+        int mid = (lo + hi) >> 1;
+        if (cdf[mid] <= u) lo = mid; else hi = mid;
+    }
+    return lo;
+}
+
+#endif

@@ -1,0 +1,216 @@
+/* Path vertices and their densities (seed ch. 3; pbrt-v3 bdpt.h struct Vertex).
+ *
+ * pdf_fwd: density of this vertex when sampled from its predecessor on its own subpath;
+ * pdf_rev: density if it were sampled from the other direction. Both are area densities,
+ * except where the vertex is an infinite light (environment, directional): those stay solid
+ * angle (seed ch. 6), and convert_density leaves them alone. */
+#ifndef CLBDPT_VERTEX_H
+#define CLBDPT_VERTEX_H
+
+#include "bsdf.h"
+#include "bvh.h"
+#include "camera.h"
+#include "lights.h"
+#include "scene.h"
+
+#define VERTEX_CAMERA 0
+#define VERTEX_LIGHT 1
+#define VERTEX_SURFACE 2
+
+typedef struct {
+    float3 p;    /* position; for an escaped camera ray a point 2 scene radii along it */
+    float3 ng;   /* geometric normal; 0 where the vertex is not on a surface */
+    float3 ns;   /* shading normal (= ng without per-vertex normals) */
+    float3 wo;   /* surface: unit direction toward the previous vertex of its subpath */
+    float3 beta; /* throughput of the subpath up to and including this vertex */
+    float pdf_fwd;
+    float pdf_rev;
+    int type;     /* VERTEX_* */
+    int delta;    /* sampled by a specular (delta) lobe */
+    int material; /* surface: material index */
+    int light;    /* light vertex: its light; surface: the area light of the triangle, or -1 */
+} PathVertex;
+
+inline int vertex_on_surface(const PathVertex* v) { return v->ng.x != 0.0f || v->ng.y != 0.0f || v->ng.z != 0.0f; }
+
+inline int vertex_light_kind(const SceneData* scene, const PathVertex* v) { return scene->lights[v->light].kind; }
+
+inline int vertex_is_light(const PathVertex* v) {
+    return v->type == VERTEX_LIGHT || (v->type == VERTEX_SURFACE && v->light >= 0);
+}
+
+inline int vertex_is_infinite_light(const SceneData* scene, const PathVertex* v) {
+    return v->type == VERTEX_LIGHT && light_is_infinite(vertex_light_kind(scene, v));
+}
+
+inline int vertex_is_delta_light(const SceneData* scene, const PathVertex* v) {
+    return v->type == VERTEX_LIGHT && light_is_delta(vertex_light_kind(scene, v));
+}
+
+/* Whether a deterministic connection to this vertex can carry energy (pbrt IsConnectible). */
+inline int vertex_is_connectible(const SceneData* scene, const PathVertex* v) {
+    switch (v->type) {
+    case VERTEX_CAMERA: return 1;
+    case VERTEX_LIGHT: return !light_is_delta_direction(vertex_light_kind(scene, v));
+    default: {
+        int kind = scene->materials[v->material].kind;
+        return kind != MATERIAL_MIRROR && kind != MATERIAL_GLASS;
+    }
+    }
+}
+
+inline Bsdf vertex_bsdf(const SceneData* scene, const PathVertex* v) {
+    return bsdf_make(&scene->materials[v->material], v->ns, v->ng);
+}
+
+/* Solid angle density at `v` toward `next` -> area density at `next` (seed 3.2, ConvertDensity). */
+inline float convert_density(const SceneData* scene, const PathVertex* v, float pdf_w, const PathVertex* next) {
+    if (vertex_is_infinite_light(scene, next)) return pdf_w;
+    float3 w = next->p - v->p;
+    float d2 = length_squared(w);
+    if (d2 == 0.0f) return 0.0f;
+    float inv_d2 = 1.0f / d2;
+    if (vertex_on_surface(next)) pdf_w *= fabs(dot(next->ng, w * sqrt(inv_d2)));
+    return pdf_w * inv_d2;
+}
+
+/* Veach's adjoint correction for shading normals on importance-transport paths
+ * (pbrt-v3 eq. 16.18): |wo.ns| |wi.ng| / (|wo.ng| |wi.ns|). */
+inline float correct_shading_normal(const PathVertex* v, float3 wo, float3 wi, int mode) {
+#ifdef HAS_SHADING_NORMALS
+    if (mode == TRANSPORT_IMPORTANCE) {
+        float num = fabs(dot(wo, v->ns)) * fabs(dot(wi, v->ng));
+        float denom = fabs(dot(wo, v->ng)) * fabs(dot(wi, v->ns));
+        return denom == 0.0f ? 0.0f : num / denom;
+    }
+#endif
+    return 1.0f;
+}
+
+/* The scattering (or, for an area light vertex, emission) from v toward `next`. */
+inline float3 vertex_f(const SceneData* scene, const PathVertex* v, const PathVertex* next, int mode) {
+    float3 wi = next->p - v->p;
+    float d2 = length_squared(wi);
+    if (d2 == 0.0f) return (float3)(0.0f);
+    wi *= rsqrt(d2);
+    if (v->type == VERTEX_SURFACE) {
+        Bsdf b = vertex_bsdf(scene, v);
+        return bsdf_f(&b, v->wo, wi) * correct_shading_normal(v, v->wo, wi, mode);
+    }
+    if (v->type == VERTEX_LIGHT && vertex_light_kind(scene, v) == LIGHT_AREA)
+        return area_light_radiance(&scene->lights[v->light], v->ng, wi);
+    return (float3)(0.0f);
+}
+
+/* Radiance emitted from light vertex v toward `prev` (pbrt Vertex::Le). */
+inline float3 vertex_le(const SceneData* scene, const PathVertex* v, const PathVertex* prev) {
+    if (!vertex_is_light(v)) return (float3)(0.0f);
+    float3 w = prev->p - v->p;
+    float d2 = length_squared(w);
+    if (d2 == 0.0f) return (float3)(0.0f);
+    w *= rsqrt(d2);
+#ifdef HAS_ENVIRONMENT
+    if (v->type == VERTEX_LIGHT) return vertex_light_kind(scene, v) == LIGHT_ENVIRONMENT ? environment_radiance(scene, -w) : (float3)(0.0f);
+#endif
+    return area_light_radiance(&scene->lights[v->light], v->ng, w);
+}
+
+/* Solid-angle density of the environment light sampling direction -w, times its selection
+ * probability; w points from the light into the scene (pbrt InfiniteLightDensity). */
+inline float infinite_light_density(const SceneData* scene, float3 w) {
+#ifdef HAS_ENVIRONMENT
+    int env = scene->info.environment_light;
+    if (env < 0) return 0.0f;
+    return scene->lights[env].select_pdf * environment_pdf_w(scene, -w);
+#else
+    return 0.0f;
+#endif
+}
+
+/* Area density at `next` of light vertex v emitting toward it (pbrt Vertex::PdfLight). */
+inline float vertex_pdf_light(const SceneData* scene, const PathVertex* v, const PathVertex* next) {
+    float3 w = next->p - v->p;
+    float d2 = length_squared(w);
+    if (d2 == 0.0f) return 0.0f;
+    float inv_d2 = 1.0f / d2;
+    w *= sqrt(inv_d2);
+    float pdf;
+    if (vertex_is_infinite_light(scene, v)) {
+        /* Emission from an infinite light starts on the scene's bounding disk (seed ch. 6). */
+        float r = scene_radius(scene);
+        pdf = 1.0f / (PI_F * r * r);
+    } else {
+        float pdf_pos, pdf_dir;
+        light_pdf_le(scene, v->light, v->ng, w, &pdf_pos, &pdf_dir);
+        pdf = pdf_dir * inv_d2;
+    }
+    if (vertex_on_surface(next)) pdf *= fabs(dot(next->ng, w));
+    return pdf;
+}
+
+/* Density of choosing light vertex v as the origin of a light subpath that continues toward
+ * `next`: selection times area density; for infinite lights the direction density
+ * (pbrt Vertex::PdfLightOrigin). */
+inline float vertex_pdf_light_origin(const SceneData* scene, const PathVertex* v, const PathVertex* next) {
+    float3 w = next->p - v->p;
+    float d2 = length_squared(w);
+    if (d2 == 0.0f) return 0.0f;
+    w *= rsqrt(d2);
+    if (vertex_is_infinite_light(scene, v)) return infinite_light_density(scene, w);
+    float pdf_pos, pdf_dir;
+    light_pdf_le(scene, v->light, v->ng, w, &pdf_pos, &pdf_dir);
+    return pdf_pos * scene->lights[v->light].select_pdf;
+}
+
+/* Area density at `next` of sampling it from v, which was reached from `prev` (prev may be
+ * null for camera and light vertices) (pbrt Vertex::Pdf). */
+inline float vertex_pdf(const SceneData* scene, const PathVertex* v, const PathVertex* prev, const PathVertex* next) {
+    if (v->type == VERTEX_LIGHT) return vertex_pdf_light(scene, v, next);
+    float3 wn = next->p - v->p;
+    float dn2 = length_squared(wn);
+    if (dn2 == 0.0f) return 0.0f;
+    wn *= rsqrt(dn2);
+    float pdf_w;
+    if (v->type == VERTEX_CAMERA) {
+        float pdf_pos;
+        camera_pdf_we(&scene->camera, v->p, wn, &pdf_pos, &pdf_w);
+    } else {
+        float3 wp = prev->p - v->p;
+        float dp2 = length_squared(wp);
+        if (dp2 == 0.0f) return 0.0f;
+        wp *= rsqrt(dp2);
+        Bsdf b = vertex_bsdf(scene, v);
+        pdf_w = bsdf_pdf(&b, wp, wn);
+    }
+    return convert_density(scene, v, pdf_w, next);
+}
+
+/* Shadow-ray shortening, relative to the distance: both ends are already moved off their
+ * surfaces (offset_ray_origin); this keeps a hit on the far surface computed a rounding error
+ * short of it from counting as an occluder. */
+#define SHADOW_RAY_SHORTEN 1e-4f
+
+/* Whether nothing blocks the segment between two vertices. */
+inline int vertices_visible(const SceneData* scene, const PathVertex* a, const PathVertex* b) {
+    float3 d = b->p - a->p;
+    float3 o = offset_ray_origin(a->p, a->ng, d);
+    float3 target = offset_ray_origin(b->p, b->ng, -d);
+    float3 dir = target - o;
+    float dist = length(dir);
+    if (!(dist > 0.0f)) return 0;
+    ++*scene->rays_traced;
+    return !occluded(scene->nodes, scene->triangles, o, dir / dist, dist * (1.0f - SHADOW_RAY_SHORTEN));
+}
+
+/* Geometric term with visibility (pbrt bdpt.cpp G): cosines at both ends over distance^2. */
+inline float geometry_term(const SceneData* scene, const PathVertex* a, const PathVertex* b) {
+    float3 d = a->p - b->p;
+    float g = 1.0f / length_squared(d);
+    d *= sqrt(g);
+    if (vertex_on_surface(a)) g *= fabs(dot(a->ns, d));
+    if (vertex_on_surface(b)) g *= fabs(dot(b->ns, d));
+    if (g == 0.0f) return 0.0f;
+    return vertices_visible(scene, a, b) ? g : 0.0f;
+}
+
+#endif

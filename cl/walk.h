@@ -1,0 +1,159 @@
+/* Subpath generation (seed ch. 4; pbrt-v3 RandomWalk, GenerateCameraSubpath,
+ * GenerateLightSubpath). Each new vertex gets pdf_fwd (area measure, or solid angle toward an
+ * infinite light) and fills in its predecessor's pdf_rev; specular vertices are marked delta
+ * with both densities 0 (seed 5.4.2). Light subpaths carry importance and use the adjoint
+ * BSDF (shading-normal correction, no 1/eta^2 on refraction). */
+#ifndef CLBDPT_WALK_H
+#define CLBDPT_WALK_H
+
+#include "rng.h"
+#include "vertex.h"
+
+/* Fills a surface vertex from a hit of the ray (o, d). */
+inline void surface_vertex_from_hit(const SceneData* scene, float3 d, const Hit* hit, PathVertex* v) {
+    __global const Triangle* tri = &scene->triangles[hit->triangle];
+    TriangleInfo info = scene->infos[hit->triangle];
+    v->type = VERTEX_SURFACE;
+    v->p = triangle_point(tri, (float2)(hit->b1, hit->b2));
+    v->ng = triangle_normal(tri);
+    v->ns = v->ng;
+#ifdef HAS_SHADING_NORMALS
+    if (info.normals >= 0) {
+        __global const TriangleNormals* tn = &scene->normals[info.normals];
+        float3 n = xyz(tn->n0) * (1.0f - hit->b1 - hit->b2) + xyz(tn->n1) * hit->b1 + xyz(tn->n2) * hit->b2;
+        float n2 = length_squared(n);
+        /* The winding decides the front face (emitters, glass); the shading normal follows it. */
+        if (n2 > 0.0f) v->ns = face_forward(n * rsqrt(n2), v->ng);
+    }
+#endif
+    v->wo = -d;
+    v->delta = 0;
+    v->material = info.material;
+    v->light = info.light;
+    v->pdf_rev = 0.0f;
+}
+
+/* Extends a subpath: path[-1] is the vertex the ray (o, d) leaves, with throughput beta and
+ * solid-angle density pdf_dir of d. Writes at most max_vertices vertices from path[0] on and
+ * returns how many. */
+inline int random_walk(const SceneData* scene, Rng* rng, float3 o, float3 d, float3 beta, float pdf_dir,
+                       int max_vertices, int mode, PathVertex* path) {
+    if (max_vertices == 0) return 0;
+    int bounces = 0;
+    float pdf_fwd = pdf_dir, pdf_rev = 0.0f;
+    for (;;) {
+        Hit hit;
+        int found = intersect(scene->nodes, scene->triangles, o, d, INFINITY, &hit);
+        ++*scene->rays_traced;
+        if (is_black(beta)) break;
+        PathVertex* vertex = &path[bounces];
+        PathVertex* prev = &path[bounces - 1];
+        if (!found) {
+#ifdef HAS_ENVIRONMENT
+            /* An escaped camera ray ends on the environment light (seed ch. 6); its density
+             * stays in solid angle. */
+            if (mode == TRANSPORT_RADIANCE && scene->info.environment_light >= 0) {
+                vertex->type = VERTEX_LIGHT;
+                vertex->p = prev->p + d * (2.0f * scene_radius(scene));
+                vertex->ng = (float3)(0.0f);
+                vertex->ns = vertex->ng;
+                vertex->wo = -d;
+                vertex->beta = beta;
+                vertex->pdf_fwd = pdf_fwd;
+                vertex->pdf_rev = 0.0f;
+                vertex->delta = 0;
+                vertex->light = scene->info.environment_light;
+                vertex->material = -1;
+                ++bounces;
+            }
+#endif
+            break;
+        }
+        surface_vertex_from_hit(scene, d, &hit, vertex);
+        vertex->beta = beta;
+        vertex->pdf_fwd = convert_density(scene, prev, pdf_fwd, vertex);
+        if (++bounces >= max_vertices) break;
+
+        float3 u = (float3)(rng_next(rng), rng_next(rng), rng_next(rng));
+        Bsdf b = vertex_bsdf(scene, vertex);
+        BsdfSample bs;
+        if (!bsdf_sample(&b, vertex->wo, u, mode, &bs) || is_black(bs.f)) break;
+        pdf_fwd = bs.pdf;
+        beta *= bs.f * (fabs(dot(bs.wi, vertex->ns)) / bs.pdf);
+        pdf_rev = bsdf_pdf(&b, bs.wi, vertex->wo);
+        if (bs.specular) {
+            vertex->delta = 1;
+            pdf_rev = pdf_fwd = 0.0f;
+        }
+        beta *= correct_shading_normal(vertex, vertex->wo, bs.wi, mode);
+        o = offset_ray_origin(vertex->p, vertex->ng, bs.wi);
+        d = bs.wi;
+        prev->pdf_rev = convert_density(scene, vertex, pdf_rev, prev);
+    }
+    return bounces;
+}
+
+/* Camera subpath through raster position `raster`: at most max_depth + 2 vertices (the camera,
+ * max_depth scattering vertices and the emitter). */
+inline int generate_camera_subpath(const SceneData* scene, Rng* rng, float2 raster, int max_depth, PathVertex* path) {
+    float3 o, d;
+    float2 u_lens = rng_next2(rng);
+    camera_generate_ray(&scene->camera, raster, u_lens, &o, &d);
+    float pdf_pos, pdf_dir;
+    camera_pdf_we(&scene->camera, o, d, &pdf_pos, &pdf_dir);
+    PathVertex* cam = &path[0];
+    cam->type = VERTEX_CAMERA;
+    cam->p = o;
+    cam->ng = (float3)(0.0f);
+    cam->ns = cam->ng;
+    cam->wo = cam->ng;
+    cam->beta = (float3)(1.0f);
+    cam->pdf_fwd = 0.0f;
+    cam->pdf_rev = 0.0f;
+    cam->delta = 0;
+    cam->material = -1;
+    cam->light = -1;
+    if (pdf_dir == 0.0f) return 1;
+    return random_walk(scene, rng, o, d, cam->beta, pdf_dir, max_depth + 1, TRANSPORT_RADIANCE, path + 1) + 1;
+}
+
+/* Light subpath: at most max_depth + 1 vertices (the light and max_depth scattering vertices). */
+inline int generate_light_subpath(const SceneData* scene, Rng* rng, int max_depth, PathVertex* path) {
+    float u_light = rng_next(rng);
+    float2 u_pos = rng_next2(rng), u_dir = rng_next2(rng);
+    if (scene->info.light_count == 0) return 0;
+    float select_pdf;
+    int light = sample_light_index(scene, u_light, &select_pdf);
+    EmittedRay er;
+    if (!light_sample_le(scene, light, u_pos, u_dir, &er)) return 0;
+    int kind = scene->lights[light].kind;
+    PathVertex* lv = &path[0];
+    lv->type = VERTEX_LIGHT;
+    lv->p = er.origin;
+    lv->ng = kind == LIGHT_AREA ? er.n : (float3)(0.0f);
+    lv->ns = lv->ng;
+    lv->wo = lv->ng;
+    /* The positional part of the throughput, used only when this vertex is joined straight
+     * to the lens (strategy (1,1)); vertex_f then supplies the emitted radiance. */
+    lv->beta = (float3)(1.0f / (select_pdf * er.pdf_pos));
+    lv->pdf_fwd = er.pdf_pos * select_pdf;
+    lv->pdf_rev = 0.0f;
+    lv->delta = 0;
+    lv->material = -1;
+    lv->light = light;
+    float3 beta = er.le * (fabs(dot(er.n, er.dir)) / (select_pdf * er.pdf_pos * er.pdf_dir));
+    float3 o = kind == LIGHT_AREA ? offset_ray_origin(er.origin, er.n, er.dir) : er.origin;
+    int n = random_walk(scene, rng, o, er.dir, beta, er.pdf_dir, max_depth, TRANSPORT_IMPORTANCE, path + 1);
+    if (light_is_infinite(kind)) {
+        /* Infinite lights: the first hit's density is that of the bounding disk, and the light
+         * vertex's own density is the direction's (seed ch. 6). */
+        if (n > 0) {
+            path[1].pdf_fwd = er.pdf_pos;
+            if (vertex_on_surface(&path[1])) path[1].pdf_fwd *= fabs(dot(er.dir, path[1].ng));
+        }
+        lv->pdf_fwd = infinite_light_density(scene, er.dir);
+    }
+    return n + 1;
+}
+
+#endif

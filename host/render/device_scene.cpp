@@ -1,0 +1,205 @@
+#include "render/device_scene.h"
+
+#include <cmath>
+#include <numeric>
+
+#include "util/error.h"
+
+namespace clbdpt {
+
+namespace {
+
+constexpr float kPi = 3.14159265358979323846f;
+
+cl_float4 float4_of(Vec3 v, float w = 0.0f) {
+    cl_float4 r;
+    r.s[0] = v.x;
+    r.s[1] = v.y;
+    r.s[2] = v.z;
+    r.s[3] = w;
+    return r;
+}
+
+Vec3 vec3_of(const cl_float4& v) { return {v.s[0], v.s[1], v.s[2]}; }
+
+// Selection weight of a light: the mean over rgb of its emitted power (luminance would give
+// zero weight to a saturated blue light that still emits).
+float mean_rgb(Vec3 c) { return (c.x + c.y + c.z) / 3.0f; }
+
+bool is_emissive(const Material& m) { return m.ke.s[0] > 0 || m.ke.s[1] > 0 || m.ke.s[2] > 0; }
+
+// Builds a normalised CDF over weights (n + 1 entries) and returns the sum. All-zero weights
+// give a uniform CDF.
+float build_cdf(const std::vector<float>& weights, float* cdf) {
+    const size_t n = weights.size();
+    double total = 0;
+    for (float w : weights) total += w;
+    cdf[0] = 0;
+    double running = 0;
+    for (size_t i = 0; i < n; ++i) {
+        running += weights[i];
+        cdf[i + 1] = total > 0 ? float(running / total) : float(double(i + 1) / double(n));
+    }
+    cdf[n] = 1.0f;
+    return float(total);
+}
+
+}  // namespace
+
+Camera make_camera(const CameraDesc& desc, int width, int height) {
+    Camera c{};
+    Vec3 forward = normalize(desc.target - desc.eye);
+    Vec3 right = cross(forward, desc.up);
+    if (!(length(right) > 0)) throw Error("camera: 'up' is parallel to the viewing direction");
+    right = normalize(right);
+    Vec3 up = cross(right, forward);
+    c.eye = float4_of(desc.eye, 1.0f);
+    c.right = float4_of(right);
+    c.up = float4_of(up);
+    c.forward = float4_of(forward);
+    // fov is the full angle across the shorter image axis (pbrt's convention).
+    float tan_half = std::tan(desc.fov_degrees * kPi / 360.0f);
+    if (width >= height) {
+        c.tan_half_height = tan_half;
+        c.tan_half_width = tan_half * float(width) / float(height);
+    } else {
+        c.tan_half_width = tan_half;
+        c.tan_half_height = tan_half * float(height) / float(width);
+    }
+    c.lens_radius = desc.lens_radius;
+    c.focus_distance = desc.focus_distance;
+    c.width = width;
+    c.height = height;
+    c.film_area = 4.0f * c.tan_half_width * c.tan_half_height;
+    c.lens_area = desc.lens_radius > 0 ? kPi * desc.lens_radius * desc.lens_radius : 1.0f;
+    return c;
+}
+
+std::vector<float> environment_distribution(const EnvironmentMap& map) {
+    const int w = map.width, h = map.height;
+    std::vector<float> d(size_t(w) * h + size_t(h) * (w + 1) + (h + 1) + 1);
+    float* func = d.data();
+    float* cond = func + size_t(w) * h;
+    float* marg = cond + size_t(h) * (w + 1);
+    std::vector<float> row_integrals(h);
+    for (int y = 0; y < h; ++y) {
+        // sin(theta) at the row centre: the map's texels shrink toward the poles.
+        float sin_theta = std::sin(kPi * (float(y) + 0.5f) / float(h));
+        std::vector<float> row(w);
+        for (int x = 0; x < w; ++x) {
+            const float* px = &map.rgb[(size_t(y) * w + x) * 3];
+            row[x] = func[size_t(y) * w + x] = mean_rgb({px[0], px[1], px[2]}) * sin_theta;
+        }
+        row_integrals[y] = build_cdf(row, cond + size_t(y) * (w + 1)) / float(w);
+    }
+    float integral = build_cdf(row_integrals, marg) / float(h);
+    marg[h + 1] = integral;
+    return d;
+}
+
+DeviceScene build_device_scene(const Scene& scene, int width, int height) {
+    DeviceScene ds;
+    Bvh bvh = build_bvh(scene.triangles);
+    ds.bvh_build_seconds = bvh.build_seconds;
+    ds.nodes = std::move(bvh.nodes);
+    ds.triangles = reorder(scene.triangles, bvh.order);
+    ds.infos = reorder(scene.infos, bvh.order);
+    ds.normals = scene.normals;
+    ds.materials = scene.materials;
+    ds.camera = make_camera(scene.camera, width, height);
+
+    Vec3 center = scene.bounds.center();
+    float radius = 0.5f * length(scene.bounds.extent());
+    if (!(radius > 0)) radius = 1.0f;
+    ds.info.world_center = float4_of(center, radius);
+    ds.info.environment_light = -1;
+
+    std::vector<float> powers;
+    // Area lights: one per emissive triangle (one-sided, front = counter-clockwise).
+    for (size_t i = 0; i < ds.triangles.size(); ++i) {
+        TriangleInfo& info = ds.infos[i];
+        info.light = -1;
+        const Material& m = ds.materials[info.material];
+        if (!is_emissive(m)) continue;
+        const Triangle& t = ds.triangles[i];
+        Vec3 e1 = vec3_of(t.p1) - vec3_of(t.p0), e2 = vec3_of(t.p2) - vec3_of(t.p0);
+        Light l{};
+        l.kind = LIGHT_AREA;
+        l.triangle = int(i);
+        l.emission = m.ke;
+        l.area = 0.5f * length(cross(e1, e2));
+        info.light = int(ds.lights.size());
+        ds.lights.push_back(l);
+        powers.push_back(mean_rgb(vec3_of(m.ke)) * l.area * kPi);
+    }
+    for (const LightDesc& desc : scene.lights) {
+        Light l{};
+        float power = 0;
+        switch (desc.kind) {
+        case LightDesc::Kind::Point:
+            l.kind = LIGHT_POINT;
+            l.position = float4_of(desc.position, 1.0f);
+            l.emission = float4_of(desc.color);
+            power = 4.0f * kPi * mean_rgb(desc.color);
+            break;
+        case LightDesc::Kind::Spot: {
+            l.kind = LIGHT_SPOT;
+            l.position = float4_of(desc.position, 1.0f);
+            Vec3 axis = desc.target - desc.position;
+            if (!(length(axis) > 0)) throw Error(scene.path + ": spot light 'target' equals its 'position'");
+            l.direction = float4_of(normalize(axis));
+            l.emission = float4_of(desc.color);
+            l.cos_total_width = std::cos(desc.cone_angle * kPi / 180.0f);
+            l.cos_falloff_start = std::cos((desc.cone_angle - desc.cone_delta) * kPi / 180.0f);
+            power = 2.0f * kPi * (1.0f - 0.5f * (l.cos_falloff_start + l.cos_total_width)) * mean_rgb(desc.color);
+            break;
+        }
+        case LightDesc::Kind::Directional:
+            l.kind = LIGHT_DIRECTIONAL;
+            if (!(length(desc.direction) > 0)) throw Error(scene.path + ": directional light has a zero 'direction'");
+            l.direction = float4_of(normalize(desc.direction));
+            l.emission = float4_of(desc.color);
+            power = kPi * radius * radius * mean_rgb(desc.color);
+            break;
+        case LightDesc::Kind::Environment: {
+            l.kind = LIGHT_ENVIRONMENT;
+            l.emission = float4_of(desc.color);
+            float mean = 1.0f;
+            if (scene.environment_map.width > 0) {
+                const EnvironmentMap& map = scene.environment_map;
+                double sum = 0;
+                for (float v : map.rgb) sum += v;
+                mean = float(sum / double(map.rgb.size()));
+            }
+            power = kPi * radius * radius * mean_rgb(desc.color) * mean;
+            ds.info.environment_light = int(ds.lights.size());
+            break;
+        }
+        }
+        ds.lights.push_back(l);
+        powers.push_back(power);
+    }
+    ds.light_cdf.assign(ds.lights.size() + 1, 0.0f);
+    if (!ds.lights.empty()) {
+        float total = build_cdf(powers, ds.light_cdf.data());
+        for (size_t i = 0; i < ds.lights.size(); ++i) {
+            ds.lights[i].power = powers[i];
+            ds.lights[i].select_pdf = total > 0 ? powers[i] / total : 1.0f / float(ds.lights.size());
+        }
+    }
+    if (scene.environment_map.width > 0) {
+        const EnvironmentMap& map = scene.environment_map;
+        ds.env_texels.resize(size_t(map.width) * map.height);
+        for (size_t i = 0; i < ds.env_texels.size(); ++i)
+            ds.env_texels[i] = float4_of({map.rgb[i * 3], map.rgb[i * 3 + 1], map.rgb[i * 3 + 2]});
+        ds.env_distribution = environment_distribution(map);
+        ds.info.env_width = map.width;
+        ds.info.env_height = map.height;
+    }
+    ds.info.light_count = int(ds.lights.size());
+    ds.info.triangle_count = int(ds.triangles.size());
+    ds.info.node_count = int(ds.nodes.size());
+    return ds;
+}
+
+}  // namespace clbdpt

@@ -1,0 +1,38 @@
+// The scene in the layout the kernels read (cl/shared/types.h): BVH-ordered triangles, one
+// Light per emissive triangle plus the scene file's lights, the power-based selection CDF,
+// the environment map's sampling distribution and the camera. Built once per render.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "bvh/bvh.h"
+#include "scene/scene.h"
+#include "shared/types.h"
+
+namespace clbdpt {
+
+struct DeviceScene {
+    std::vector<BvhNode> nodes;
+    std::vector<Triangle> triangles;
+    std::vector<TriangleInfo> infos;
+    std::vector<TriangleNormals> normals;
+    std::vector<Material> materials;
+    std::vector<Light> lights;
+    std::vector<float> light_cdf;         // lights.size() + 1 entries
+    std::vector<cl_float4> env_texels;    // env map, row 0 = +y
+    std::vector<float> env_distribution;  // see cl/lights.h
+    Camera camera{};
+    SceneInfo info{};
+    double bvh_build_seconds = 0;
+};
+
+// width/height: the film size actually rendered (scene's, or the command line's overrides).
+DeviceScene build_device_scene(const Scene& scene, int width, int height);
+
+Camera make_camera(const CameraDesc& desc, int width, int height);
+
+// Sampling distribution of a lat-long map (layout in cl/lights.h).
+std::vector<float> environment_distribution(const EnvironmentMap& map);
+
+}  // namespace clbdpt

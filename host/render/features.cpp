@@ -1,0 +1,64 @@
+#include "render/features.h"
+
+#include "util/error.h"
+
+namespace clbdpt {
+
+const char* integrator_name(Integrator integrator) {
+    switch (integrator) {
+    case Integrator::Pt: return "pt";
+    case Integrator::Lt: return "lt";
+    default: return "bdpt";
+    }
+}
+
+Integrator parse_integrator(const std::string& name) {
+    if (name == "bdpt") return Integrator::Bdpt;
+    if (name == "pt") return Integrator::Pt;
+    if (name == "lt") return Integrator::Lt;
+    throw Error("unknown integrator '" + name + "' (expected bdpt, pt or lt)");
+}
+
+std::vector<std::string> kernel_defines(const DeviceScene& scene, Integrator integrator, int max_depth,
+                                        bool all_features) {
+    bool area = false, point = false, spot = false, directional = false, environment = false;
+    for (const Light& l : scene.lights) {
+        area |= l.kind == LIGHT_AREA;
+        point |= l.kind == LIGHT_POINT;
+        spot |= l.kind == LIGHT_SPOT;
+        directional |= l.kind == LIGHT_DIRECTIONAL;
+        environment |= l.kind == LIGHT_ENVIRONMENT;
+    }
+    bool glossy = false, mirror = false, glass = false;
+    for (const Material& m : scene.materials) {
+        glossy |= m.kind == MATERIAL_GLOSSY;
+        mirror |= m.kind == MATERIAL_MIRROR;
+        glass |= m.kind == MATERIAL_GLASS;
+    }
+    bool shading_normals = !scene.normals.empty();
+    bool thin_lens = scene.camera.lens_radius > 0;
+    bool env_map = scene.info.env_width > 0;
+
+    std::vector<std::string> d;
+    d.push_back("MAX_DEPTH=" + std::to_string(max_depth));
+    d.push_back("INTEGRATOR=" + std::to_string(int(integrator)));
+    auto flag = [&](bool on, const char* name) {
+        if (on || all_features) d.push_back(name);
+    };
+    flag(area, "HAS_AREA_LIGHTS");
+    flag(point, "HAS_POINT_LIGHTS");
+    flag(spot, "HAS_SPOT_LIGHTS");
+    flag(directional, "HAS_DIRECTIONAL_LIGHTS");
+    flag(environment, "HAS_ENVIRONMENT");
+    // The map's code reads buffers that exist only with a map; "all features" keeps it off
+    // unless the scene has one.
+    if (env_map) d.push_back("HAS_ENVIRONMENT_MAP");
+    flag(glossy, "HAS_GLOSSY");
+    flag(mirror, "HAS_MIRROR");
+    flag(glass, "HAS_GLASS");
+    flag(shading_normals, "HAS_SHADING_NORMALS");
+    flag(thin_lens, "HAS_THIN_LENS");
+    return d;
+}
+
+}  // namespace clbdpt

@@ -1,0 +1,22 @@
+// The per-scene kernel specialisation: which -D flags the render program is built with, so a
+// feature the scene does not use costs no code, registers or branches (issue "Speed against
+// error", section 3). The flags are part of the program cache key (host/device/opencl.cpp).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "render/device_scene.h"
+
+namespace clbdpt {
+
+enum class Integrator { Bdpt = 0, Pt = 1, Lt = 2 };
+
+const char* integrator_name(Integrator integrator);
+Integrator parse_integrator(const std::string& name);  // throws Error
+
+// all_features: every HAS_* flag on (the unspecialised build, for benchmarks and tests).
+std::vector<std::string> kernel_defines(const DeviceScene& scene, Integrator integrator, int max_depth,
+                                        bool all_features = false);
+
+}  // namespace clbdpt

@@ -1,0 +1,154 @@
+#include "render/renderer.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "util/error.h"
+
+namespace clbdpt {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point start) {
+    return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+// OpenCL cannot make empty buffers: an absent feature gets a one-element placeholder.
+template <typename T>
+cl::Buffer upload(cl::Context& context, const std::vector<T>& data) {
+    if (data.empty()) {
+        T zero{};
+        return cl::Buffer(context, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof(T), &zero);
+    }
+    return cl::Buffer(context, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof(T) * data.size(),
+                      const_cast<T*>(data.data()));
+}
+
+// Output memory per launch is bounded: a camera float4 and max_depth + 1 splat records per item.
+constexpr size_t kMaxBatchBytes = size_t(256) << 20;
+constexpr int kMaxBatchItems = 1 << 18;
+
+}  // namespace
+
+std::vector<float> Film::image() const {
+    std::vector<float> out(camera_sum.size());
+    const double inv = spp > 0 ? 1.0 / spp : 0.0;
+    for (size_t i = 0; i < out.size(); ++i) out[i] = float((camera_sum[i] + light_sum[i]) * inv);
+    return out;
+}
+
+Renderer::Renderer(DeviceContext& device, const DeviceScene& scene, const RenderOptions& options)
+    : device_(device), scene_(scene), options_(options) {
+    if (options.max_depth < 0) throw Error("--max-depth must be >= 0");
+    stats_.defines = kernel_defines(scene, options.integrator, options.max_depth, options.all_features);
+    const ProgramBuild& build = device.program("kernels/render.cl", stats_.defines);
+    stats_.build_seconds = build.seconds;
+    stats_.program_from_cache = build.from_cache;
+    try {
+        kernel_ = cl::Kernel(build.program, "render_bdpt");
+        cl::Context& ctx = device.context();
+        scene_buffers_ = {upload(ctx, scene.nodes),     upload(ctx, scene.triangles), upload(ctx, scene.infos),
+                          upload(ctx, scene.normals),   upload(ctx, scene.materials), upload(ctx, scene.lights),
+                          upload(ctx, scene.light_cdf), upload(ctx, scene.env_texels),
+                          upload(ctx, scene.env_distribution)};
+        splat_slots_ = options.max_depth + 1;
+        const size_t bytes_per_item = sizeof(cl_float4) + sizeof(SplatRecord) * size_t(splat_slots_);
+        const int pixels = scene.camera.width * scene.camera.height;
+        size_t limit = std::min<size_t>(kMaxBatchBytes, device.entry().max_alloc) / bytes_per_item;
+        batch_items_ = int(std::min<size_t>({size_t(pixels), size_t(kMaxBatchItems), limit}));
+        if (options.batch_items > 0) batch_items_ = std::min(batch_items_, options.batch_items);
+        batch_items_ = std::max(batch_items_, 1);
+        camera_out_ = cl::Buffer(ctx, CL_MEM_WRITE_ONLY, sizeof(cl_float4) * batch_items_);
+        splats_ = cl::Buffer(ctx, CL_MEM_WRITE_ONLY, sizeof(SplatRecord) * size_t(batch_items_) * splat_slots_);
+        camera_host_.resize(batch_items_);
+        splats_host_.resize(size_t(batch_items_) * splat_slots_);
+        for (size_t i = 0; i < scene_buffers_.size(); ++i) kernel_.setArg(cl_uint(i), scene_buffers_[i]);
+        kernel_.setArg(9, scene.camera);
+        kernel_.setArg(10, scene.info);
+        kernel_.setArg(12, camera_out_);
+        kernel_.setArg(13, splats_);
+    } catch (const cl::Error& e) {
+        throw Error(std::string("OpenCL: ") + e.what() + ": " + cl_error_name(e.err()) +
+                    " while setting up the render on " + device.entry().name);
+    }
+}
+
+void Renderer::run_batch(Film& film, uint32_t sample_index, int first_pixel, int pixel_count) {
+    RenderParams params{};
+    params.width = scene_.camera.width;
+    params.height = scene_.camera.height;
+    params.first_pixel = first_pixel;
+    params.pixel_count = pixel_count;
+    params.sample_index = sample_index;
+    params.seed = options_.seed;
+    params.max_depth = options_.max_depth;
+    cl::CommandQueue& queue = device_.queue();
+    try {
+        kernel_.setArg(11, params);
+        queue.enqueueNDRangeKernel(kernel_, cl::NullRange, cl::NDRange(size_t(pixel_count)), cl::NullRange);
+        queue.enqueueReadBuffer(camera_out_, CL_FALSE, 0, sizeof(cl_float4) * pixel_count, camera_host_.data());
+        queue.enqueueReadBuffer(splats_, CL_TRUE, 0, sizeof(SplatRecord) * size_t(pixel_count) * splat_slots_,
+                                splats_host_.data());
+    } catch (const cl::Error& e) {
+        throw Error(std::string("OpenCL: ") + e.what() + ": " + cl_error_name(e.err()) + " while rendering on " +
+                    device_.entry().name);
+    }
+    const int width = params.width;
+    for (int i = 0; i < pixel_count; ++i) {
+        const cl_float4& c = camera_host_[i];
+        const int pixel = first_pixel + i;
+        if (!std::isfinite(c.s[0]) || !std::isfinite(c.s[1]) || !std::isfinite(c.s[2]))
+            throw Error("non-finite radiance at pixel (" + std::to_string(pixel % width) + ", " +
+                        std::to_string(pixel / width) + ") sample " + std::to_string(sample_index) +
+                        " (a bug: please report it with the scene)");
+        double* dst = &film.camera_sum[size_t(pixel) * 3];
+        dst[0] += c.s[0];
+        dst[1] += c.s[1];
+        dst[2] += c.s[2];
+        stats_.rays += uint64_t(c.s[3]);
+    }
+    for (size_t k = 0; k < size_t(pixel_count) * splat_slots_; ++k) {
+        const SplatRecord& r = splats_host_[k];
+        if (r.pixel < 0) continue;
+        if (!std::isfinite(r.r) || !std::isfinite(r.g) || !std::isfinite(r.b))
+            throw Error("non-finite light-image splat at pixel index " + std::to_string(r.pixel) + " sample " +
+                        std::to_string(sample_index) + " (a bug: please report it with the scene)");
+        double* dst = &film.light_sum[size_t(r.pixel) * 3];
+        dst[0] += r.r;
+        dst[1] += r.g;
+        dst[2] += r.b;
+    }
+    stats_.samples += uint64_t(pixel_count);
+}
+
+void Renderer::render_passes(Film& film, uint32_t first_sample, int count) {
+    const int pixels = scene_.camera.width * scene_.camera.height;
+    for (int k = 0; k < count; ++k) {
+        for (int first = 0; first < pixels; first += batch_items_)
+            run_batch(film, first_sample + uint32_t(k), first, std::min(batch_items_, pixels - first));
+        ++film.spp;
+    }
+}
+
+Film Renderer::render() {
+    Film film(scene_.camera.width, scene_.camera.height);
+    const auto start = Clock::now();
+    if (options_.time_budget > 0) {
+        while (seconds_since(start) < options_.time_budget) {
+            render_passes(film, uint32_t(film.spp), 1);
+            if (options_.progress) options_.progress(film.spp, 0, seconds_since(start));
+        }
+    } else {
+        for (int pass = 0; pass < options_.spp; ++pass) {
+            render_passes(film, uint32_t(pass), 1);
+            if (options_.progress) options_.progress(film.spp, options_.spp, seconds_since(start));
+        }
+    }
+    stats_.seconds = seconds_since(start);
+    return film;
+}
+
+}  // namespace clbdpt

@@ -1,0 +1,79 @@
+// Drives the render kernel: uploads the device scene, runs one launch per batch of pixels and
+// sample index, and adds the camera contributions and t = 1 splat records into double-precision
+// sums on the host in a fixed order, so the same scene, seed and spp on the same device give
+// the same image bit for bit however the work is batched.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "device/opencl.h"
+#include "render/device_scene.h"
+#include "render/features.h"
+
+namespace clbdpt {
+
+struct RenderOptions {
+    Integrator integrator = Integrator::Bdpt;
+    int spp = 16;
+    double time_budget = 0;  // seconds; > 0: render whole passes until spent (spp is then ignored)
+    int max_depth = 5;
+    uint32_t seed = 0;
+    bool all_features = false;  // build the unspecialised kernel
+    int batch_items = 0;        // work items per launch; 0 = automatic
+    // Called after each pass: passes done, passes planned (0 if time-bound), seconds so far.
+    std::function<void(int, int, double)> progress;
+};
+
+// Image sums, kept apart so passes and devices merge exactly: image = camera / spp + light / spp.
+struct Film {
+    int width = 0;
+    int height = 0;
+    int spp = 0;
+    std::vector<double> camera_sum;  // rgb per pixel
+    std::vector<double> light_sum;   // rgb per pixel, t = 1 splats
+
+    Film(int w, int h) : width(w), height(h), camera_sum(size_t(w) * h * 3), light_sum(size_t(w) * h * 3) {}
+    std::vector<float> image() const;
+};
+
+struct RenderStats {
+    double seconds = 0;           // wall time of the passes (excluding the kernel build)
+    double build_seconds = 0;     // kernel build or cache load
+    bool program_from_cache = false;
+    uint64_t samples = 0;         // pixel samples (one camera + one light subpath each)
+    uint64_t rays = 0;            // closest-hit and shadow rays traced
+    std::vector<std::string> defines;
+};
+
+class Renderer {
+public:
+    Renderer(DeviceContext& device, const DeviceScene& scene, const RenderOptions& options);
+
+    // Renders samples [first_sample, first_sample + count) of every pixel into film.
+    void render_passes(Film& film, uint32_t first_sample, int count);
+
+    // The whole render per options (spp or time budget).
+    Film render();
+
+    const RenderStats& stats() const { return stats_; }
+
+private:
+    void run_batch(Film& film, uint32_t sample_index, int first_pixel, int pixel_count);
+
+    DeviceContext& device_;
+    const DeviceScene& scene_;
+    RenderOptions options_;
+    RenderStats stats_;
+    cl::Kernel kernel_;
+    std::vector<cl::Buffer> scene_buffers_;
+    cl::Buffer camera_out_, splats_;
+    int batch_items_ = 0;
+    int splat_slots_ = 0;
+    std::vector<cl_float4> camera_host_;
+    std::vector<SplatRecord> splats_host_;
+};
+
+}  // namespace clbdpt

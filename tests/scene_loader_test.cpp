@@ -1,0 +1,518 @@
+// Scene loading: the Cornell box, the MTL -> Material mapping, the JSON scene format, and every
+// way a scene or mesh file can be wrong (each must fail with file and line or key).
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "scene/scene.h"
+#include "util/error.h"
+
+namespace clbdpt {
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::string kData = CLBDPT_TEST_DATA_DIR;
+const std::string kScenes = CLBDPT_SCENES_DIR;
+
+std::string data(const std::string& name) { return kData + "/" + name; }
+
+// The message load_scene throws for `path`, or "" if it loads.
+std::string load_error(const std::string& path) {
+    try {
+        load_scene(path);
+    } catch (const Error& e) {
+        return e.what();
+    }
+    return "";
+}
+
+#define EXPECT_CONTAINS(haystack, needle)                                                       \
+    EXPECT_NE(std::string(haystack).find(needle), std::string::npos)                            \
+        << "expected \"" << (needle) << "\" in \"" << (haystack) << "\""
+
+// A JSON scene written to a fresh folder; meshes are named by absolute path.
+class TempScene {
+public:
+    explicit TempScene(const std::string& json) {
+        std::string test = ::testing::UnitTest::GetInstance()->current_test_info()->name();
+        for (char& c : test) c = c == '/' ? '_' : c;  // parameterised tests: "Name/3"
+        dir_ = fs::temp_directory_path() /
+               ("clbdpt_scene_test_" + std::to_string(::getpid()) + "_" + test + "_" + std::to_string(counter_++));
+        fs::create_directories(dir_);
+        path_ = (dir_ / "scene.json").string();
+        std::ofstream(path_) << json;
+    }
+    ~TempScene() {
+        std::error_code ec;
+        fs::remove_all(dir_, ec);
+    }
+    const std::string& path() const { return path_; }
+
+private:
+    static inline int counter_ = 0;
+    fs::path dir_;
+    std::string path_;
+};
+
+std::string quoted_mesh(const std::string& name) { return "\"" + data(name) + "\""; }
+
+int material_index(const Scene& scene, const std::string& name) {
+    for (size_t i = 0; i < scene.material_names.size(); ++i) {
+        if (scene.material_names[i] == name) return static_cast<int>(i);
+    }
+    ADD_FAILURE() << "no material named " << name;
+    return 0;
+}
+
+const Material& material(const Scene& scene, const std::string& name) {
+    return scene.materials[static_cast<size_t>(material_index(scene, name))];
+}
+
+void expect_rgb(const clbdpt_float4& v, float r, float g, float b, float tolerance = 1e-6f) {
+    EXPECT_NEAR(v.s[0], r, tolerance);
+    EXPECT_NEAR(v.s[1], g, tolerance);
+    EXPECT_NEAR(v.s[2], b, tolerance);
+}
+
+void expect_vec(const Vec3& v, float x, float y, float z, float tolerance = 1e-4f) {
+    EXPECT_NEAR(v.x, x, tolerance);
+    EXPECT_NEAR(v.y, y, tolerance);
+    EXPECT_NEAR(v.z, z, tolerance);
+}
+
+Vec3 xyz(const clbdpt_float4& v) { return {v.s[0], v.s[1], v.s[2]}; }
+
+bool emissive(const Material& m) { return m.ke.s[0] > 0 || m.ke.s[1] > 0 || m.ke.s[2] > 0; }
+
+// ---- The Cornell box ---------------------------------------------------------------------
+
+TEST(SceneLoader, CornellBox) {
+    const Scene scene = load_scene(kScenes + "/cornell-box/cornell-box.json");
+    // 5 walls + light + 2 blocks of 5 quads = 16 quads.
+    EXPECT_EQ(scene.triangles.size(), 32u);
+    EXPECT_EQ(scene.infos.size(), 32u);
+    EXPECT_TRUE(scene.normals.empty());
+    EXPECT_TRUE(scene.lights.empty());
+    EXPECT_TRUE(scene.warnings.empty()) << scene.warnings.front();
+
+    int emissive_materials = 0;
+    for (const Material& m : scene.materials) emissive_materials += emissive(m) ? 1 : 0;
+    EXPECT_EQ(emissive_materials, 1);
+    const Material& light = material(scene, "light");
+    expect_rgb(light.ke, 17, 12, 4);
+    expect_rgb(light.kd, 0.78f, 0.78f, 0.78f);
+    EXPECT_EQ(light.kind, MATERIAL_DIFFUSE);
+    expect_rgb(material(scene, "red").kd, 0.63f, 0.065f, 0.05f);
+    expect_rgb(material(scene, "green").kd, 0.14f, 0.45f, 0.091f);
+    expect_rgb(material(scene, "white").kd, 0.73f, 0.73f, 0.73f);
+
+    // The light's two triangles face down into the room, as the one-sided emitter requires.
+    int light_triangles = 0;
+    for (size_t i = 0; i < scene.triangles.size(); ++i) {
+        const TriangleInfo& info = scene.infos[i];
+        EXPECT_EQ(info.source_index, static_cast<int>(i));
+        EXPECT_EQ(info.light, -1);
+        EXPECT_EQ(info.normals, -1);
+        EXPECT_EQ(scene.triangles[i].p0.s[3], 0.0f);
+        if (!emissive(scene.materials[static_cast<size_t>(info.material)])) continue;
+        ++light_triangles;
+        const Triangle& t = scene.triangles[i];
+        const Vec3 n = normalize(cross(xyz(t.p1) - xyz(t.p0), xyz(t.p2) - xyz(t.p0)));
+        expect_vec(n, 0, -1, 0, 1e-6f);
+        EXPECT_NEAR(t.p0.s[1], 548.7f, 1e-3f);
+    }
+    EXPECT_EQ(light_triangles, 2);
+
+    expect_vec(scene.bounds.lo, 0, 0, 0);
+    expect_vec(scene.bounds.hi, 556, 548.8f, 559.2f);
+
+    expect_vec(scene.camera.eye, 278, 273, -800);
+    expect_vec(scene.camera.target, 278, 273, 0);
+    expect_vec(scene.camera.up, 0, 1, 0);
+    EXPECT_FLOAT_EQ(scene.camera.fov_degrees, 39.3f);
+    EXPECT_FLOAT_EQ(scene.camera.focus_distance, 800.0f);
+    EXPECT_EQ(scene.width, 256);
+    EXPECT_EQ(scene.height, 256);
+    EXPECT_EQ(scene.render.spp, 64);
+    EXPECT_EQ(scene.render.max_depth, 5);
+}
+
+// ---- MTL mapping -------------------------------------------------------------------------
+
+class MtlMapping : public ::testing::Test {
+protected:
+    static void SetUpTestSuite() { scene_ = new Scene(load_scene(data("materials.obj"))); }
+    static void TearDownTestSuite() { delete scene_; }
+    static const Scene& scene() { return *scene_; }
+    static inline Scene* scene_ = nullptr;
+};
+
+TEST_F(MtlMapping, FacesFollowTheirMaterials) {
+    // One face per material in file order, the first with none: "default".
+    const char* expected[] = {"default",   "matte",      "lamp",       "mirror",   "glass",         "glass_no_ni",
+                              "glossy_ns", "glossy_pr", "too_bright", "textured", "glowing_mirror"};
+    ASSERT_EQ(scene().infos.size(), std::size(expected));
+    for (size_t i = 0; i < scene().infos.size(); ++i) {
+        EXPECT_EQ(scene().material_names[static_cast<size_t>(scene().infos[i].material)], expected[i]);
+    }
+    EXPECT_EQ(scene().materials.size(), scene().material_names.size());
+}
+
+TEST_F(MtlMapping, DefaultMaterialIsGreyDiffuse) {
+    const Material& m = material(scene(), "default");
+    EXPECT_EQ(m.kind, MATERIAL_DIFFUSE);
+    expect_rgb(m.kd, 0.5f, 0.5f, 0.5f);
+    expect_rgb(m.ke, 0, 0, 0);
+}
+
+TEST_F(MtlMapping, Diffuse) {
+    const Material& m = material(scene(), "matte");
+    EXPECT_EQ(m.kind, MATERIAL_DIFFUSE);
+    expect_rgb(m.kd, 0.5f, 0.6f, 0.7f);
+    expect_rgb(m.ks, 0, 0, 0);
+    expect_rgb(m.ke, 0, 0, 0);
+}
+
+TEST_F(MtlMapping, Emissive) {
+    const Material& m = material(scene(), "lamp");
+    EXPECT_EQ(m.kind, MATERIAL_DIFFUSE);
+    expect_rgb(m.ke, 10, 8, 6);
+    expect_rgb(m.kd, 0.2f, 0.2f, 0.2f);
+}
+
+TEST_F(MtlMapping, MirrorIllum5) {
+    const Material& m = material(scene(), "mirror");
+    EXPECT_EQ(m.kind, MATERIAL_MIRROR);
+    expect_rgb(m.ks, 0.9f, 0.8f, 0.7f);
+}
+
+TEST_F(MtlMapping, GlassIllum7UsesNi) {
+    EXPECT_EQ(material(scene(), "glass").kind, MATERIAL_GLASS);
+    EXPECT_FLOAT_EQ(material(scene(), "glass").ior, 1.7f);
+    EXPECT_EQ(material(scene(), "glass_no_ni").kind, MATERIAL_GLASS);
+    EXPECT_FLOAT_EQ(material(scene(), "glass_no_ni").ior, 1.5f);
+}
+
+TEST_F(MtlMapping, GlossyFromNs) {
+    const Material& m = material(scene(), "glossy_ns");
+    EXPECT_EQ(m.kind, MATERIAL_GLOSSY);
+    expect_rgb(m.kd, 0.3f, 0.3f, 0.3f);
+    expect_rgb(m.ks, 0.4f, 0.4f, 0.4f);
+    EXPECT_NEAR(m.alpha, std::sqrt(2.0f / (98.0f + 2.0f)), 1e-6f);
+}
+
+TEST_F(MtlMapping, GlossyFromPr) {
+    const Material& m = material(scene(), "glossy_pr");
+    EXPECT_EQ(m.kind, MATERIAL_GLOSSY);
+    EXPECT_NEAR(m.alpha, 0.25f, 1e-6f);
+}
+
+TEST_F(MtlMapping, EnergyRescaledWithWarning) {
+    const Material& m = material(scene(), "too_bright");
+    EXPECT_EQ(m.kind, MATERIAL_GLOSSY);
+    // Red sums to 1.4 and is scaled to 1; green (0.8) and blue (0.4) are left alone.
+    expect_rgb(m.kd, 0.8f / 1.4f, 0.5f, 0.2f);
+    expect_rgb(m.ks, 0.6f / 1.4f, 0.3f, 0.2f);
+    int warnings = 0;
+    for (const std::string& w : scene().warnings) {
+        if (w.find("\"too_bright\"") != std::string::npos) {
+            ++warnings;
+            EXPECT_CONTAINS(w, "energy");
+        }
+    }
+    EXPECT_EQ(warnings, 1);
+}
+
+TEST_F(MtlMapping, UnmappableFeaturesWarnOncePerMaterial) {
+    int warnings = 0;
+    for (const std::string& w : scene().warnings) {
+        if (w.find("\"textured\"") == std::string::npos) continue;
+        ++warnings;
+        EXPECT_CONTAINS(w, "map_Kd");
+        EXPECT_CONTAINS(w, "illum 3");
+        EXPECT_CONTAINS(w, "Tf");
+    }
+    EXPECT_EQ(warnings, 1);
+    // The textured material still maps its plain colour.
+    expect_rgb(material(scene(), "textured").kd, 0.5f, 0.5f, 0.5f);
+    // Only the energy rescale and the unmappable features warn; the scene has a light.
+    EXPECT_EQ(scene().warnings.size(), 2u);
+}
+
+TEST_F(MtlMapping, EmissiveMirrorStaysEmissive) {
+    const Material& m = material(scene(), "glowing_mirror");
+    EXPECT_EQ(m.kind, MATERIAL_MIRROR);
+    expect_rgb(m.ke, 1, 2, 3);
+}
+
+// ---- JSON scenes -------------------------------------------------------------------------
+
+TEST(SceneJson, AllFourLightTypes) {
+    const Scene scene = load_scene(data("all_lights.json"));
+    ASSERT_EQ(scene.lights.size(), 4u);
+
+    const LightDesc& point = scene.lights[0];
+    EXPECT_EQ(point.kind, LightDesc::Kind::Point);
+    expect_vec(point.position, 0, 2, 0);
+    expect_vec(point.color, 10, 10, 10);
+
+    const LightDesc& spot = scene.lights[1];
+    EXPECT_EQ(spot.kind, LightDesc::Kind::Spot);
+    expect_vec(spot.position, 0, 3, 0);
+    expect_vec(spot.target, 0, 0, 0);
+    expect_vec(spot.direction, 0, -1, 0);
+    expect_vec(spot.color, 5, 4, 3);
+    EXPECT_FLOAT_EQ(spot.cone_angle, 25.0f);
+    EXPECT_FLOAT_EQ(spot.cone_delta, 4.0f);
+
+    const LightDesc& sun = scene.lights[2];
+    EXPECT_EQ(sun.kind, LightDesc::Kind::Directional);
+    expect_vec(sun.direction, 0, -1, 0);
+    expect_vec(sun.color, 1, 0.5f, 0.25f);
+
+    const LightDesc& env = scene.lights[3];
+    EXPECT_EQ(env.kind, LightDesc::Kind::Environment);
+    expect_vec(env.color, 2, 2, 2);
+    EXPECT_TRUE(fs::path(env.map_path).is_absolute());
+    EXPECT_TRUE(fs::equivalent(env.map_path, data("sky.ppm")));
+    EXPECT_EQ(scene.environment_map.width, 2);
+    EXPECT_EQ(scene.environment_map.height, 1);
+    ASSERT_EQ(scene.environment_map.rgb.size(), 6u);
+    EXPECT_FLOAT_EQ(scene.environment_map.rgb[0], 1.0f);
+    EXPECT_FLOAT_EQ(scene.environment_map.rgb[1], 0.0f);
+    EXPECT_FLOAT_EQ(scene.environment_map.rgb[5], 1.0f);
+
+    expect_vec(scene.camera.eye, 0, 1, -5);
+    EXPECT_FLOAT_EQ(scene.camera.fov_degrees, 45.0f);
+    EXPECT_FLOAT_EQ(scene.camera.lens_radius, 0.1f);
+    EXPECT_NEAR(scene.camera.focus_distance, std::sqrt(26.0f), 1e-5f);  // defaults to |target - eye|
+    EXPECT_EQ(scene.width, 320);
+    EXPECT_EQ(scene.height, 240);
+    EXPECT_EQ(scene.render.spp, 8);
+    EXPECT_EQ(scene.render.max_depth, 3);
+    EXPECT_EQ(scene.render.seed, 7u);
+
+    // floor.obj: a quad with per-vertex normals and no MTL.
+    EXPECT_EQ(scene.triangles.size(), 2u);
+    ASSERT_EQ(scene.normals.size(), 2u);
+    EXPECT_EQ(scene.infos[1].normals, 1);
+    expect_rgb(scene.normals[0].n2, 0, 1, 0);
+    EXPECT_EQ(scene.material_names[static_cast<size_t>(scene.infos[0].material)], "default");
+    EXPECT_TRUE(scene.warnings.empty());
+}
+
+TEST(SceneJson, ConstantEnvironmentNeedsNoMap) {
+    TempScene t(R"({"meshes": [)" + quoted_mesh("frame.obj") +
+                R"(], "lights": [{"type": "environment", "radiance": [0.5, 0.5, 0.5]}]})");
+    const Scene scene = load_scene(t.path());
+    ASSERT_EQ(scene.lights.size(), 1u);
+    EXPECT_TRUE(scene.lights[0].map_path.empty());
+    EXPECT_EQ(scene.environment_map.width, 0);
+    EXPECT_TRUE(scene.warnings.empty());
+}
+
+TEST(SceneJson, Defaults) {
+    const Scene scene = load_scene(data("defaults.json"));
+    EXPECT_EQ(scene.width, 256);
+    EXPECT_EQ(scene.height, 256);
+    EXPECT_EQ(scene.render.spp, 16);
+    EXPECT_EQ(scene.render.max_depth, 5);
+    EXPECT_EQ(scene.render.seed, 0u);
+    // No camera: framed like a bare OBJ.
+    const float distance = std::sqrt(14.0f) / std::sin(0.5f * 39.3f * 3.14159265f / 180.0f);
+    expect_vec(scene.camera.eye, 0, 0, -distance);
+    expect_vec(scene.camera.target, 0, 0, 0);
+    EXPECT_NEAR(scene.camera.focus_distance, distance, 1e-4f);
+    ASSERT_EQ(scene.warnings.size(), 1u);
+    EXPECT_EQ(scene.warnings[0], "scene has no lights: the image will be black");
+}
+
+TEST(SceneJson, PartialCameraKeepsFramingForTheRest) {
+    TempScene t(R"({"camera": {"fov": 60}, "meshes": [)" + quoted_mesh("frame.obj") + "]}");
+    const Scene scene = load_scene(t.path());
+    const float distance = std::sqrt(14.0f) / std::sin(0.5f * 60.0f * 3.14159265f / 180.0f);
+    expect_vec(scene.camera.eye, 0, 0, -distance);
+    EXPECT_FLOAT_EQ(scene.camera.fov_degrees, 60.0f);
+}
+
+TEST(SceneJson, UnknownKeyNamesFileAndKeyPath) {
+    EXPECT_EQ(load_error(data("unknown_key.json")), data("unknown_key.json") + ": unknown key \"camera.fovy\"");
+}
+
+TEST(SceneJson, BadJsonNamesLineAndColumn) {
+    // The comma after line 3 is missing: the parser stops at the end of the "render" token
+    // (nlohmann's position: the last character it read).
+    const std::string message = load_error(data("bad_syntax.json"));
+    EXPECT_CONTAINS(message, data("bad_syntax.json") + ":4:10: ");
+    EXPECT_CONTAINS(message, "syntax error");
+}
+
+struct BadJsonCase {
+    const char* json;  // "MESH" is replaced by the absolute path of frame.obj
+    const char* expected;
+};
+
+class SceneJsonErrors : public ::testing::TestWithParam<BadJsonCase> {};
+
+TEST_P(SceneJsonErrors, NameTheKey) {
+    std::string json = GetParam().json;
+    const size_t at = json.find("MESH");
+    if (at != std::string::npos) json.replace(at, 4, quoted_mesh("frame.obj"));
+    TempScene t(json);
+    const std::string message = load_error(t.path());
+    EXPECT_CONTAINS(message, t.path() + ": ");
+    EXPECT_CONTAINS(message, GetParam().expected);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Cases, SceneJsonErrors,
+    ::testing::Values(
+        BadJsonCase{R"({"meshes": [MESH], "extra": 1})", R"(unknown key "extra")"},
+        BadJsonCase{R"({"meshes": [MESH], "render": {"spp": 4, "samples": 2}})", R"(unknown key "render.samples")"},
+        BadJsonCase{R"({"meshes": [MESH], "lights": [{"type": "point", "position": [0,0,0], "intensity": [1,1,1],
+                      "radius": 1}]})",
+                    R"(unknown key "lights[0].radius")"},
+        BadJsonCase{R"({"meshes": [MESH], "film": {"width": "256"}})", R"("film.width" must be an integer)"},
+        BadJsonCase{R"({"meshes": [MESH], "film": {"width": -1}})", R"("film.width" must be an integer from 1)"},
+        BadJsonCase{R"({"meshes": [MESH], "film": {"height": 12.5}})", R"("film.height")"},
+        BadJsonCase{R"({"meshes": [MESH], "render": {"spp": 0}})", R"("render.spp")"},
+        BadJsonCase{R"({"meshes": [MESH], "render": {"seed": -3}})", R"("render.seed")"},
+        BadJsonCase{R"({"meshes": [MESH], "camera": {"eye": [0, 0]}})", R"("camera.eye" must be an array of 3 numbers)"},
+        BadJsonCase{R"({"meshes": [MESH], "camera": {"eye": [0, 0, 1e999]}})", R"("camera.eye[2]" must be finite)"},
+        BadJsonCase{R"({"meshes": [MESH], "lights": [{"type": "point", "position": [0,0,0], "intensity": [1,1,1]},
+                      {"type": "point", "position": [0,-1e400,0]}]})",
+                    R"("lights[1].position[1]" must be finite)"},
+        BadJsonCase{R"({"meshes": [MESH], "camera": {"eye": [0, 0, 1e39]}})", R"("camera.eye" must be finite)"},
+        BadJsonCase{R"({"meshes": [MESH], "camera": {"fov": 1e300}})", R"("camera.fov" must be finite)"},
+        BadJsonCase{R"({"meshes": [MESH], "camera": {"fov": 180}})", R"("camera.fov")"},
+        BadJsonCase{R"({"meshes": [MESH], "camera": {"lens_radius": -1}})", R"("camera.lens_radius")"},
+        BadJsonCase{R"({"meshes": [MESH], "camera": {"eye": [0,5,0], "target": [0,0,0]}})", R"("camera.up")"},
+        BadJsonCase{R"({"meshes": [MESH], "camera": "front"})", R"("camera" must be an object)"},
+        BadJsonCase{R"({"meshes": [MESH], "lights": [{"type": "area"}]})", R"("lights[0].type" must be one of)"},
+        BadJsonCase{R"({"meshes": [MESH], "lights": [{"position": [0,0,0]}]})", R"("lights[0].type" is missing)"},
+        BadJsonCase{R"({"meshes": [MESH], "lights": [{"type": "point", "position": [0,0,0]}]})",
+                    R"("lights[0].intensity" is missing)"},
+        BadJsonCase{R"({"meshes": [MESH], "lights": [{"type": "point", "position": [0,0,0], "intensity": [1,-1,1]}]})",
+                    R"("lights[0].intensity" must not be negative)"},
+        BadJsonCase{R"({"meshes": [MESH], "lights": [{"type": "spot", "position": [0,0,0], "target": [0,-1,0],
+                      "intensity": [1,1,1], "cone_angle": 10, "cone_delta": 20}]})",
+                    R"("lights[0].cone_delta")"},
+        BadJsonCase{R"({"meshes": [MESH], "lights": [{"type": "directional", "direction": [0,0,0], "radiance": [1,1,1]}]})",
+                    R"("lights[0].direction" must not be zero)"},
+        BadJsonCase{R"({"meshes": [MESH], "lights": [{"type": "environment", "radiance": [1,1,1]},
+                                                     {"type": "environment", "radiance": [1,1,1]}]})",
+                    R"("lights[1]" is a second environment light)"},
+        BadJsonCase{R"({"film": {"width": 64}})", R"("meshes" is missing)"},
+        BadJsonCase{R"({"meshes": []})", R"("meshes" must name at least one mesh)"},
+        BadJsonCase{R"({"meshes": "a.obj"})", R"("meshes" must be an array)"},
+        BadJsonCase{R"([1, 2])", "must be a JSON object"}));
+
+TEST(SceneJson, MissingEnvironmentMapNamesIt) {
+    TempScene t(R"({"meshes": [)" + quoted_mesh("frame.obj") +
+                R"(], "lights": [{"type": "environment", "map": "no_such_sky.exr"}]})");
+    EXPECT_CONTAINS(load_error(t.path()), "cannot open '");
+    EXPECT_CONTAINS(load_error(t.path()), "no_such_sky.exr' (referenced by " + t.path() + ")");
+}
+
+TEST(SceneJson, MeshesConcatenate) {
+    TempScene t(R"({"meshes": [)" + quoted_mesh("floor.obj") + ", " + quoted_mesh("materials.obj") + "]}");
+    const Scene scene = load_scene(t.path());
+    ASSERT_EQ(scene.triangles.size(), 2u + 11u);
+    for (size_t i = 0; i < scene.infos.size(); ++i) EXPECT_EQ(scene.infos[i].source_index, static_cast<int>(i));
+    // floor.obj's faces and materials.obj's material-less face share one "default" material.
+    int defaults = 0;
+    for (const std::string& name : scene.material_names) defaults += name == "default" ? 1 : 0;
+    EXPECT_EQ(defaults, 1);
+    EXPECT_EQ(scene.infos[0].material, scene.infos[2].material);
+    EXPECT_EQ(scene.material_names[static_cast<size_t>(scene.infos[3].material)], "matte");
+    EXPECT_EQ(scene.material_names[static_cast<size_t>(scene.infos[12].material)], "glowing_mirror");
+    EXPECT_EQ(scene.infos[2].normals, -1);
+    expect_vec(scene.bounds.lo, -1, 0, -1);
+    expect_vec(scene.bounds.hi, 1, 1, 1);
+}
+
+// ---- Broken inputs -----------------------------------------------------------------------
+
+TEST(SceneErrors, MissingSceneFile) {
+    EXPECT_EQ(load_error(data("no_such_scene.json")), "cannot open '" + data("no_such_scene.json") + "'");
+    EXPECT_EQ(load_error(data("no_such_mesh.obj")), "cannot open '" + data("no_such_mesh.obj") + "'");
+}
+
+TEST(SceneErrors, UnknownSceneFormat) { EXPECT_CONTAINS(load_error(data("sky.ppm")), "unknown scene format"); }
+
+TEST(SceneErrors, MissingMesh) {
+    EXPECT_EQ(load_error(data("missing_mesh.json")),
+              "cannot open '" + data("no_such_mesh.obj") + "' (referenced by " + data("missing_mesh.json") + ")");
+}
+
+TEST(SceneErrors, MissingMtl) {
+    EXPECT_EQ(load_error(data("missing_mtl.obj")),
+              "cannot open '" + data("no_such_file.mtl") + "' (referenced by " + data("missing_mtl.obj") + ":2)");
+}
+
+TEST(SceneErrors, NanVertexNamesLine) {
+    EXPECT_CONTAINS(load_error(data("nan_vertex.obj")), data("nan_vertex.obj") + ":4: ");
+    EXPECT_CONTAINS(load_error(data("nan_vertex.obj")), "not finite");
+}
+
+TEST(SceneErrors, TruncatedFaceNamesLine) {
+    EXPECT_CONTAINS(load_error(data("truncated_face.obj")), data("truncated_face.obj") + ":6: face needs at least 3");
+}
+
+TEST(SceneErrors, TruncatedVertexNamesLine) {
+    EXPECT_CONTAINS(load_error(data("truncated_vertex.obj")),
+                    data("truncated_vertex.obj") + ":5: vertex needs 3 coordinates");
+}
+
+TEST(SceneErrors, OutOfRangeFaceNamesLine) {
+    EXPECT_CONTAINS(load_error(data("out_of_range.obj")), data("out_of_range.obj") + ":5: vertex index 7 out of range");
+}
+
+TEST(SceneErrors, ZeroAreaTriangleNamesLine) {
+    EXPECT_EQ(load_error(data("zero_area.obj")), data("zero_area.obj") + ":7: zero-area triangle");
+}
+
+TEST(SceneErrors, EmptyObj) {
+    EXPECT_EQ(load_error(data("empty.obj")), data("empty.obj") + ": no faces (an OBJ scene needs triangles)");
+}
+
+TEST(SceneErrors, ErrorsInsideAJsonSceneNameTheMesh) {
+    TempScene t(R"({"meshes": [)" + quoted_mesh("zero_area.obj") + "]}");
+    EXPECT_EQ(load_error(t.path()), data("zero_area.obj") + ":7: zero-area triangle");
+}
+
+// ---- Bare OBJ scenes ---------------------------------------------------------------------
+
+TEST(BareObj, CameraFramesTheBounds) {
+    const Scene scene = load_scene(data("frame.obj"));
+    expect_vec(scene.bounds.lo, -1, -2, -3);
+    expect_vec(scene.bounds.hi, 1, 2, 3);
+    // Bounding sphere of radius sqrt(14) fits the 39.3 degree field of view exactly.
+    const float distance = std::sqrt(14.0f) / std::sin(0.5f * 39.3f * 3.14159265f / 180.0f);
+    expect_vec(scene.camera.eye, 0, 0, -distance);
+    expect_vec(scene.camera.target, 0, 0, 0);
+    expect_vec(scene.camera.up, 0, 1, 0);
+    EXPECT_FLOAT_EQ(scene.camera.fov_degrees, 39.3f);
+    EXPECT_FLOAT_EQ(scene.camera.lens_radius, 0.0f);
+    EXPECT_EQ(scene.width, 256);
+    EXPECT_EQ(scene.height, 256);
+    EXPECT_TRUE(scene.lights.empty());
+    ASSERT_EQ(scene.warnings.size(), 1u);
+    EXPECT_EQ(scene.warnings[0], "scene has no lights: the image will be black");
+    EXPECT_EQ(scene.path, data("frame.obj"));
+}
+
+TEST(BareObj, EmissiveMaterialsAreTheLights) {
+    const Scene scene = load_scene(data("materials.obj"));
+    EXPECT_TRUE(scene.lights.empty());
+    for (const std::string& w : scene.warnings) EXPECT_EQ(w.find("no lights"), std::string::npos) << w;
+}
+
+}  // namespace
+}  // namespace clbdpt
