@@ -17,7 +17,7 @@ namespace clbdpt::detail {
 
 // ---- obj_prescan.cpp ---------------------------------------------------------------------
 
-// What the pre-scan learns about an OBJ file. tinyobj silently turns "nan" or a missing
+// What the pre-scan learns about an OBJ file (faces and line numbers). tinyobj silently turns "nan" or a missing
 // coordinate into 0 and skips faces with bad indices, so every `v`, `vn`, `vt`, `f` and `mtllib`
 // line is checked here first, and the line numbers are kept to name the culprit later.
 struct ObjPrescan {
@@ -25,8 +25,6 @@ struct ObjPrescan {
     std::vector<int> face_lines;       // source line of each `f`, in order
     std::vector<size_t> face_offsets;  // face f's corners: face_vertices[face_offsets[f]..[f+1])
     std::vector<int> face_vertices;    // 0-based position index of every face corner
-    std::vector<std::string> mtllibs;  // material files named by `mtllib`, as written
-    std::vector<int> mtllib_lines;
 };
 
 // Reads and validates `obj_path` (shown in messages as `display`). Throws Error

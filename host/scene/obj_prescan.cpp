@@ -23,23 +23,19 @@ namespace fs = std::filesystem;
     throw Error(display + ":" + std::to_string(line) + ": " + what);
 }
 
-// Splits on the line breaks tinyobj recognises ("\n", "\r\n" and a lone "\r"), so that line
-// numbers agree with the ones tinyobj puts in its own messages.
-std::vector<std::string> split_lines(const std::string& text) {
-    std::vector<std::string> lines;
-    std::string current;
-    for (size_t i = 0; i < text.size(); ++i) {
-        char c = text[i];
-        if (c == '\n' || c == '\r') {
-            lines.push_back(current);
-            current.clear();
-            if (c == '\r' && i + 1 < text.size() && text[i + 1] == '\n') ++i;
-        } else {
-            current += c;
-        }
+// Reads the next line from `text` at `*pos`, ending at the line breaks tinyobj recognises
+// ("\n", "\r\n" and a lone "\r") so that line numbers agree with tinyobj's own messages.
+bool next_line(const std::string& text, size_t* pos, std::string* line) {
+    if (*pos >= text.size()) return false;
+    const size_t end = text.find_first_of("\r\n", *pos);
+    if (end == std::string::npos) {
+        line->assign(text, *pos, std::string::npos);
+        *pos = text.size();
+        return true;
     }
-    if (!current.empty()) lines.push_back(current);
-    return lines;
+    line->assign(text, *pos, end - *pos);
+    *pos = end + ((text[end] == '\r' && end + 1 < text.size() && text[end + 1] == '\n') ? 2 : 1);
+    return true;
 }
 
 std::vector<std::string> split_tokens(const std::string& line) {
@@ -160,10 +156,11 @@ ObjPrescan prescan_obj(const std::string& obj_path, const std::string& display) 
     long texcoord_count = 0;
     std::vector<ForwardReference> forward;
 
-    const std::vector<std::string> lines = split_lines(buffer.str());
-    for (size_t i = 0; i < lines.size(); ++i) {
-        const int line = static_cast<int>(i + 1);
-        const std::vector<std::string> tokens = split_tokens(lines[i]);
+    const std::string text = buffer.str();
+    size_t pos = 0;
+    std::string line_text;
+    for (int line = 1; next_line(text, &pos, &line_text); ++line) {
+        const std::vector<std::string> tokens = split_tokens(line_text);
         if (tokens.empty() || tokens[0][0] == '#') continue;
         const std::string& keyword = tokens[0];
 
@@ -236,10 +233,8 @@ ObjPrescan prescan_obj(const std::string& obj_path, const std::string& display) 
             scan.face_lines.push_back(line);
             scan.face_offsets.push_back(scan.face_vertices.size() - (tokens.size() - 1));
         } else if (keyword == "mtllib") {
-            const size_t at = lines[i].find("mtllib") + 6;
-            for (const std::string& name : split_mtllib(lines[i].substr(at))) {
-                scan.mtllibs.push_back(name);
-                scan.mtllib_lines.push_back(line);
+            const size_t at = line_text.find("mtllib") + 6;
+            for (const std::string& name : split_mtllib(line_text.substr(at))) {
                 fs::path file = fs::path(obj_path).parent_path() / name;
                 std::error_code ec;
                 if (!fs::is_regular_file(file, ec) || !std::ifstream(file)) {

@@ -195,8 +195,6 @@ public:
         return s;
     }
 
-    const std::string& file() const { return file_; }
-
 private:
     std::string file_;
 };

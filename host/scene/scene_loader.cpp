@@ -14,8 +14,6 @@ namespace detail {
 
 namespace fs = std::filesystem;
 
-// pbrt's Cornell box camera: 35 mm focal length on a 25 mm film, 2 atan(12.5 / 35).
-constexpr float kDefaultFovDegrees = 39.3f;
 constexpr float kPi = 3.14159265358979323846f;
 
 void require_readable_file(const std::string& path, const std::string& display,
@@ -74,7 +72,7 @@ Scene load_scene(const std::string& path) {
     } else if (ext == ".obj") {
         detail::MeshLoadContext context;
         detail::append_obj_mesh(scene, context, path, path, "");
-        scene.camera = detail::frame_bounds(scene.bounds, detail::kDefaultFovDegrees);
+        scene.camera = detail::frame_bounds(scene.bounds, CameraDesc{}.fov_degrees);
     } else {
         detail::require_readable_file(path, path, "");
         throw Error(path + ": unknown scene format '" + ext + "' (expected .json or .obj)");

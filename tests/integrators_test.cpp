@@ -1,0 +1,75 @@
+// Whole-image tests of the BDPT kernels: bdpt, pt and lt estimate the same image (each with
+// its own set of strategies and MIS over exactly that set), renders are deterministic however
+// the work is batched, and nothing non-finite comes out.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "render_test_util.h"
+
+namespace clbdpt::test {
+namespace {
+
+// Two independent estimates agree if they differ by less than kSigmas combined standard errors.
+// With 4x4 regions and two pairs that is 32 comparisons; at 4.5 sigma a correct renderer fails
+// one with probability about 32 * 6.8e-6 = 2e-4 (and the seeds are fixed, so a pass stays a pass).
+constexpr double kSigmas = 4.5;
+
+void expect_agree(const RegionStats& a, const RegionStats& b, const char* what) {
+    for (size_t r = 0; r < a.mean.size(); ++r) {
+        double se = std::sqrt(a.std_error[r] * a.std_error[r] + b.std_error[r] * b.std_error[r]);
+        EXPECT_LE(std::fabs(a.mean[r] - b.mean[r]), kSigmas * se)
+            << what << " region " << r << ": " << a.mean[r] << " vs " << b.mean[r] << " (standard error " << se << ")";
+    }
+    double se = std::hypot(a.image_std_error, b.image_std_error);
+    EXPECT_LE(std::fabs(a.image_mean - b.image_mean), kSigmas * se)
+        << what << " image mean: " << a.image_mean << " vs " << b.image_mean << " (standard error " << se << ")";
+}
+
+DeviceScene small_scene(const std::string& name, int size) {
+    Scene scene = load_scene(scene_path(name));
+    return build_device_scene(scene, size, size);
+}
+
+TEST(Integrators, AgreeOnCornellBox) {
+    DeviceScene scene = small_scene("cornell-box", 48);
+    RenderOptions options;
+    options.max_depth = 5;
+    options.seed = 1;
+    const int passes = 96;
+    options.integrator = Integrator::Bdpt;
+    RegionStats bdpt = render_region_stats(scene, options, passes, 4);
+    options.integrator = Integrator::Pt;
+    options.seed = 2;
+    RegionStats pt = render_region_stats(scene, options, passes, 4);
+    options.integrator = Integrator::Lt;
+    options.seed = 3;
+    RegionStats lt = render_region_stats(scene, options, passes, 4);
+    ASSERT_GT(bdpt.image_mean, 0.01);
+    expect_agree(bdpt, pt, "bdpt vs pt");
+    expect_agree(bdpt, lt, "bdpt vs lt");
+}
+
+TEST(Integrators, ImageDoesNotDependOnBatching) {
+    DeviceScene scene = small_scene("cornell-box", 40);
+    RenderOptions options;
+    options.max_depth = 5;
+    Renderer whole(test_device(), scene, options);
+    Film a(40, 40);
+    whole.render_passes(a, 0, 2);
+    options.batch_items = 333;  // does not divide the pixel count
+    Renderer batched(test_device(), scene, options);
+    Film b(40, 40);
+    batched.render_passes(b, 0, 2);
+    EXPECT_EQ(a.camera_sum, b.camera_sum);
+    EXPECT_EQ(a.light_sum, b.light_sum);
+    // And a different seed gives a different image.
+    options.seed = 7;
+    Renderer reseeded(test_device(), scene, options);
+    Film c(40, 40);
+    reseeded.render_passes(c, 0, 2);
+    EXPECT_NE(a.camera_sum, c.camera_sum);
+}
+
+}  // namespace
+}  // namespace clbdpt::test

@@ -1,0 +1,81 @@
+// Shared by the whole-image tests: one OpenCL device context per test process (so programs
+// are built once), bundled-scene loading, and per-pass statistics for tolerances in standard
+// errors.
+#pragma once
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "device/opencl.h"
+#include "render/device_scene.h"
+#include "render/renderer.h"
+#include "scene/scene.h"
+
+namespace clbdpt::test {
+
+inline DeviceContext& test_device() {
+    static DeviceContext device(select_device(""));
+    return device;
+}
+
+inline std::string scene_path(const std::string& name) {
+    return std::string(CLBDPT_SCENES_DIR) + "/" + name + "/" + name + ".json";
+}
+
+// Per-region statistics over independent passes: the image is cut into blocks x blocks
+// regions; each pass (one sample per pixel, its own sample index) gives one value per region
+// (mean over the region's pixels and channels), and passes are independent, so the mean's
+// standard error is the passes' standard deviation / sqrt(passes).
+struct RegionStats {
+    int blocks = 0;
+    std::vector<double> mean;       // per region
+    std::vector<double> std_error;  // per region
+    double image_mean = 0;
+    double image_std_error = 0;
+};
+
+inline RegionStats render_region_stats(const DeviceScene& scene, RenderOptions options, int passes, int blocks) {
+    Renderer renderer(test_device(), scene, options);
+    const int w = scene.camera.width, h = scene.camera.height;
+    const int regions = blocks * blocks;
+    std::vector<double> sum(regions + 1), sum2(regions + 1);
+    for (int pass = 0; pass < passes; ++pass) {
+        Film film(w, h);
+        renderer.render_passes(film, uint32_t(pass), 1);
+        std::vector<float> img = film.image();
+        std::vector<double> value(regions + 1, 0.0);
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x) {
+                int region = (y * blocks / h) * blocks + (x * blocks / w);
+                for (int c = 0; c < 3; ++c) {
+                    double v = img[(size_t(y) * w + x) * 3 + c];
+                    value[region] += v;
+                    value[regions] += v;
+                }
+            }
+        for (int r = 0; r <= regions; ++r) {
+            double norm = r < regions ? double(regions) / (3.0 * w * h) : 1.0 / (3.0 * w * h);
+            double v = value[r] * norm;
+            sum[r] += v;
+            sum2[r] += v * v;
+        }
+    }
+    RegionStats st;
+    st.blocks = blocks;
+    for (int r = 0; r <= regions; ++r) {
+        double m = sum[r] / passes;
+        double var = std::max(0.0, (sum2[r] / passes - m * m)) * passes / (passes - 1);
+        double se = std::sqrt(var / passes);
+        if (r < regions) {
+            st.mean.push_back(m);
+            st.std_error.push_back(se);
+        } else {
+            st.image_mean = m;
+            st.image_std_error = se;
+        }
+    }
+    return st;
+}
+
+}  // namespace clbdpt::test
