@@ -1,0 +1,130 @@
+// The command line as a user meets it: bad input of every kind gives one clear error line,
+// a non-zero exit and no output file; a good render writes the image and the stats JSON.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct CommandResult {
+    int status = -1;
+    std::string output;  // stdout and stderr together
+};
+
+CommandResult run(const std::string& args) {
+    CommandResult r;
+    std::string cmd = std::string(CLBDPT_BINARY) + " " + args + " 2>&1";
+    FILE* pipe = popen(cmd.c_str(), "r");
+    if (!pipe) return r;
+    std::array<char, 4096> buf;
+    size_t n;
+    while ((n = fread(buf.data(), 1, buf.size(), pipe)) > 0) r.output.append(buf.data(), n);
+    int st = pclose(pipe);
+    r.status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+    return r;
+}
+
+std::string data(const std::string& name) { return std::string(CLBDPT_TEST_DATA_DIR) + "/" + name; }
+
+class CliTest : public ::testing::Test {
+protected:
+    void SetUp() override {
+        dir_ = fs::temp_directory_path() / ("clbdpt_cli_" + std::to_string(::getpid()) + "_" +
+                                            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+        fs::remove_all(dir_);
+        fs::create_directories(dir_);
+    }
+    void TearDown() override { fs::remove_all(dir_); }
+    std::string out(const std::string& name) const { return (dir_ / name).string(); }
+    bool dir_is_empty() const { return fs::is_empty(dir_); }
+    fs::path dir_;
+};
+
+struct BadInput {
+    const char* name;
+    std::string args;      // after "render"
+    const char* expected;  // a piece of the error message
+};
+
+TEST_F(CliTest, BadInputGivesOneErrorLineAndNoOutput) {
+    const std::string tiny = " --spp 1 --width 8 --height 8";
+    const BadInput cases[] = {
+        {"truncated OBJ", data("truncated_face.obj") + tiny, "truncated_face.obj:"},
+        {"truncated vertex", data("truncated_vertex.obj") + tiny, "truncated_vertex.obj:"},
+        {"missing MTL", data("missing_mtl.obj") + tiny, "cannot open"},
+        {"NaN vertex", data("nan_vertex.obj") + tiny, "nan_vertex.obj:"},
+        {"zero-area triangle", data("zero_area.obj") + tiny, "zero-area"},
+        {"out-of-range face", data("out_of_range.obj") + tiny, "out_of_range.obj:"},
+        {"empty OBJ", data("empty.obj") + tiny, "empty.obj"},
+        {"bad JSON", data("bad_syntax.json") + tiny, "bad_syntax.json:"},
+        {"unknown key", data("unknown_key.json") + tiny, "fovy"},
+        {"missing mesh", data("missing_mesh.json") + tiny, "no_such_mesh.obj"},
+        {"missing scene", data("no_such_scene.json") + tiny, "no_such_scene.json"},
+        {"unknown device", data("defaults.json") + tiny + " --device no-such-device-xyz", "no-such-device-xyz"},
+        {"unknown device index", data("defaults.json") + tiny + " --device 999", "999"},
+        {"unsupported output", data("defaults.json") + tiny, "unsupported output"},
+    };
+    for (const BadInput& c : cases) {
+        std::string output = std::string(c.name) == "unsupported output" ? out("image.xyz") : out("image.png");
+        CommandResult r = run("render " + c.args + " -o " + output + " --stats " + out("stats.json"));
+        EXPECT_NE(r.status, 0) << c.name << ": " << r.output;
+        EXPECT_NE(r.output.find("clbdpt: error: "), std::string::npos) << c.name << ": " << r.output;
+        EXPECT_NE(r.output.find(c.expected), std::string::npos) << c.name << ": " << r.output;
+        // One line: the error, nothing after it.
+        size_t err = r.output.find("clbdpt: error: ");
+        if (err != std::string::npos)
+            EXPECT_EQ(r.output.find('\n', err), r.output.size() - 1) << c.name << ": " << r.output;
+        EXPECT_TRUE(dir_is_empty()) << c.name << ": left a file behind";
+    }
+}
+
+TEST_F(CliTest, RenderWritesImageAndStats) {
+    CommandResult r = run("render " + data("materials.obj") + " --spp 2 --width 24 --height 16 -o " + out("a.exr") +
+                " --stats " + out("s.json"));
+    ASSERT_EQ(r.status, 0) << r.output;
+    EXPECT_TRUE(fs::exists(out("a.exr")));
+    std::ifstream in(out("s.json"));
+    nlohmann::json j = nlohmann::json::parse(in);
+    for (const char* key : {"spp", "seconds", "samples_per_second", "rays_per_second", "kernel_build_seconds", "device",
+                            "triangles"})
+        EXPECT_TRUE(j.contains(key)) << key;
+    EXPECT_EQ(j["spp"], 2);
+    EXPECT_EQ(j["samples"], 2 * 24 * 16);
+    EXPECT_GT(j["rays_per_second"].get<double>(), 0.0);
+    EXPECT_GT(j["triangles"].get<int>(), 0);
+    // The one-line summary names samples/s and rays/s.
+    EXPECT_NE(r.output.find("samples/s"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("rays/s"), std::string::npos) << r.output;
+}
+
+TEST_F(CliTest, AovRendersTheFirstHit) {
+    CommandResult r = run("render " + data("materials.obj") + " --aov normal --width 16 --height 16 -o " + out("n.exr"));
+    ASSERT_EQ(r.status, 0) << r.output;
+    EXPECT_TRUE(fs::exists(out("n.exr")));
+}
+
+TEST_F(CliTest, DevicesListsAtLeastOne) {
+    CommandResult r = run("devices");
+    ASSERT_EQ(r.status, 0) << r.output;
+    EXPECT_NE(r.output.find("0 "), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("CPU"), std::string::npos) << r.output;
+}
+
+TEST_F(CliTest, HelpDocumentsTheOptions) {
+    CommandResult r = run("render --help");
+    EXPECT_EQ(r.status, 0);
+    for (const char* opt : {"--output", "--spp", "--time", "--max-depth", "--seed", "--device", "--width", "--height",
+                            "--stats", "--integrator", "--aov"})
+        EXPECT_NE(r.output.find(opt), std::string::npos) << opt;
+}
+
+}  // namespace
