@@ -20,6 +20,39 @@ typedef struct {
     uint* rays_traced; /* the work item's ray counter (closest-hit and shadow rays) */
 } SceneData;
 
+/* The kernel arguments every light-transport kernel takes, in this order (the host sets them
+ * in host/render/renderer.cpp). */
+#define SCENE_KERNEL_ARGS                                                                              \
+    __global const BvhNode *nodes, __global const Triangle *triangles, __global const TriangleInfo *infos, \
+        __global const TriangleNormals *normals, __global const Material *materials,                    \
+        __global const Light *lights, __global const float *light_cdf, __global const float4 *env_texels, \
+        __global const float *env_distribution, Camera camera, SceneInfo info
+
+#define SCENE_DATA_FROM_KERNEL_ARGS(rays)                                                               \
+    scene_data(nodes, triangles, infos, normals, materials, lights, light_cdf, env_texels, env_distribution, \
+               camera, info, rays)
+
+inline SceneData scene_data(__global const BvhNode* nodes, __global const Triangle* triangles,
+                            __global const TriangleInfo* infos, __global const TriangleNormals* normals,
+                            __global const Material* materials, __global const Light* lights,
+                            __global const float* light_cdf, __global const float4* env_texels,
+                            __global const float* env_distribution, Camera camera, SceneInfo info, uint* rays) {
+    SceneData s;
+    s.nodes = nodes;
+    s.triangles = triangles;
+    s.infos = infos;
+    s.normals = normals;
+    s.materials = materials;
+    s.lights = lights;
+    s.light_cdf = light_cdf;
+    s.env_texels = env_texels;
+    s.env_distribution = env_distribution;
+    s.camera = camera;
+    s.info = info;
+    s.rays_traced = rays;
+    return s;
+}
+
 inline float scene_radius(const SceneData* scene) { return scene->info.world_center.w; }
 
 inline float3 scene_center(const SceneData* scene) {

@@ -9,8 +9,8 @@
 #include "rng.h"
 #include "vertex.h"
 
-/* Fills a surface vertex from a hit of the ray (o, d). */
-inline void surface_vertex_from_hit(const SceneData* scene, float3 d, const Hit* hit, PathVertex* v) {
+/* Fills a surface vertex from a hit of a ray that left `prev`. */
+inline void surface_vertex_from_hit(const SceneData* scene, const PathVertex* prev, const Hit* hit, PathVertex* v) {
     __global const Triangle* tri = &scene->triangles[hit->triangle];
     TriangleInfo info = scene->infos[hit->triangle];
     v->type = VERTEX_SURFACE;
@@ -26,7 +26,7 @@ inline void surface_vertex_from_hit(const SceneData* scene, float3 d, const Hit*
         if (n2 > 0.0f) v->ns = face_forward(n * rsqrt(n2), v->ng);
     }
 #endif
-    v->wo = -d;
+    v->wo = normalize(prev->p - v->p);
     v->delta = 0;
     v->material = info.material;
     v->light = info.light;
@@ -35,12 +35,18 @@ inline void surface_vertex_from_hit(const SceneData* scene, float3 d, const Hit*
 
 /* Extends a subpath: path[-1] is the vertex the ray (o, d) leaves, with throughput beta and
  * solid-angle density pdf_dir of d. Writes at most max_vertices vertices from path[0] on and
- * returns how many. */
+ * returns how many.
+ *
+ * Densities between surface vertices are evaluated from the vertex positions, exactly as every
+ * MIS evaluation later does, not from the sampled direction: the ray leaves from an offset
+ * origin, so the direction to where it landed differs from the sampled one by up to ~1e-5 rad,
+ * and a near-specular glossy lobe's density changes by percents over that. With positions on
+ * both sides the MIS weights of a path sum to 1 to float precision (tests/mis_test.cpp). */
 inline int random_walk(const SceneData* scene, Rng* rng, float3 o, float3 d, float3 beta, float pdf_dir,
                        int max_vertices, int mode, PathVertex* path) {
     if (max_vertices == 0) return 0;
     int bounces = 0;
-    float pdf_fwd = pdf_dir, pdf_rev = 0.0f;
+    float pdf_fwd = pdf_dir;
     for (;;) {
         Hit hit;
         int found = intersect(scene->nodes, scene->triangles, o, d, INFINITY, &hit);
@@ -48,31 +54,36 @@ inline int random_walk(const SceneData* scene, Rng* rng, float3 o, float3 d, flo
         if (is_black(beta)) break;
         PathVertex* vertex = &path[bounces];
         PathVertex* prev = &path[bounces - 1];
-        if (!found) {
+        if (found) {
+            surface_vertex_from_hit(scene, prev, &hit, vertex);
+        } else {
 #ifdef HAS_ENVIRONMENT
             /* An escaped camera ray ends on the environment light (seed ch. 6); its density
              * stays in solid angle. */
-            if (mode == TRANSPORT_RADIANCE && scene->info.environment_light >= 0) {
-                vertex->type = VERTEX_LIGHT;
-                vertex->p = prev->p + d * (2.0f * scene_radius(scene));
-                vertex->ng = (float3)(0.0f);
-                vertex->ns = vertex->ng;
-                vertex->wo = -d;
-                vertex->beta = beta;
-                vertex->pdf_fwd = pdf_fwd;
-                vertex->pdf_rev = 0.0f;
-                vertex->delta = 0;
-                vertex->light = scene->info.environment_light;
-                vertex->material = -1;
-                ++bounces;
-            }
-#endif
+            if (mode != TRANSPORT_RADIANCE || scene->info.environment_light < 0) break;
+            vertex->type = VERTEX_LIGHT;
+            vertex->p = prev->p + d * (2.0f * scene_radius(scene));
+            vertex->ng = (float3)(0.0f);
+            vertex->ns = vertex->ng;
+            vertex->wo = -d;
+            vertex->delta = 0;
+            vertex->light = scene->info.environment_light;
+            vertex->material = -1;
+            vertex->pdf_rev = 0.0f;
+#else
             break;
+#endif
         }
-        surface_vertex_from_hit(scene, d, &hit, vertex);
         vertex->beta = beta;
+        if (bounces > 0 && !prev->delta) {
+            float3 w = normalize(vertex->p - prev->p);
+            Bsdf prev_bsdf = vertex_bsdf(scene, prev);
+            pdf_fwd = bsdf_pdf(&prev_bsdf, prev->wo, w);
+            path[bounces - 2].pdf_rev = convert_density(scene, prev, bsdf_pdf(&prev_bsdf, w, prev->wo), &path[bounces - 2]);
+        }
         vertex->pdf_fwd = convert_density(scene, prev, pdf_fwd, vertex);
-        if (++bounces >= max_vertices) break;
+        ++bounces;
+        if (vertex->type == VERTEX_LIGHT || bounces >= max_vertices) break;
 
         float3 u = (float3)(rng_next(rng), rng_next(rng), rng_next(rng));
         Bsdf b = vertex_bsdf(scene, vertex);
@@ -80,15 +91,15 @@ inline int random_walk(const SceneData* scene, Rng* rng, float3 o, float3 d, flo
         if (!bsdf_sample(&b, vertex->wo, u, mode, &bs) || is_black(bs.f)) break;
         pdf_fwd = bs.pdf;
         beta *= bs.f * (fabs(dot(bs.wi, vertex->ns)) / bs.pdf);
-        pdf_rev = bsdf_pdf(&b, bs.wi, vertex->wo);
         if (bs.specular) {
+            /* A delta lobe has no density to compare with (seed 5.4.2): both are 0. */
             vertex->delta = 1;
-            pdf_rev = pdf_fwd = 0.0f;
+            pdf_fwd = 0.0f;
+            prev->pdf_rev = 0.0f;
         }
         beta *= correct_shading_normal(vertex, vertex->wo, bs.wi, mode);
         o = offset_ray_origin(vertex->p, vertex->ng, bs.wi);
         d = bs.wi;
-        prev->pdf_rev = convert_density(scene, vertex, pdf_rev, prev);
     }
     return bounces;
 }

@@ -15,28 +15,12 @@
 
 #define SPLAT_SLOTS (MAX_DEPTH + 1)
 
-__kernel void render_bdpt(__global const BvhNode* nodes, __global const Triangle* triangles,
-                          __global const TriangleInfo* infos, __global const TriangleNormals* normals,
-                          __global const Material* materials, __global const Light* lights,
-                          __global const float* light_cdf, __global const float4* env_texels,
-                          __global const float* env_distribution, Camera camera, SceneInfo info,
-                          RenderParams params, __global float4* camera_out, __global SplatRecord* splats) {
+__kernel void render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, __global float4* camera_out,
+                          __global SplatRecord* splats) {
     int gid = get_global_id(0);
     if (gid >= params.pixel_count) return;
-    SceneData scene;
-    scene.nodes = nodes;
-    scene.triangles = triangles;
-    scene.infos = infos;
-    scene.normals = normals;
-    scene.materials = materials;
-    scene.lights = lights;
-    scene.light_cdf = light_cdf;
-    scene.env_texels = env_texels;
-    scene.env_distribution = env_distribution;
-    scene.camera = camera;
-    scene.info = info;
     uint rays_traced = 0;
-    scene.rays_traced = &rays_traced;
+    SceneData scene = SCENE_DATA_FROM_KERNEL_ARGS(&rays_traced);
 
     int pixel = params.first_pixel + gid;
     int px = pixel % params.width, py = pixel / params.width;

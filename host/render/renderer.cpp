@@ -16,20 +16,12 @@ double seconds_since(Clock::time_point start) {
     return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
-// OpenCL cannot make empty buffers: an absent feature gets a one-element placeholder.
-template <typename T>
-cl::Buffer upload(cl::Context& context, const std::vector<T>& data) {
-    if (data.empty()) {
-        T zero{};
-        return cl::Buffer(context, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof(T), &zero);
-    }
-    return cl::Buffer(context, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, sizeof(T) * data.size(),
-                      const_cast<T*>(data.data()));
-}
-
 // Output memory per launch is bounded: a camera float4 and max_depth + 1 splat records per item.
 constexpr size_t kMaxBatchBytes = size_t(256) << 20;
 constexpr int kMaxBatchItems = 1 << 18;
+
+// render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, camera_out, splats)
+constexpr cl_uint kParamsArg = SceneBuffers::kSceneArgCount;
 
 }  // namespace
 
@@ -50,10 +42,7 @@ Renderer::Renderer(DeviceContext& device, const DeviceScene& scene, const Render
     try {
         kernel_ = cl::Kernel(build.program, "render_bdpt");
         cl::Context& ctx = device.context();
-        scene_buffers_ = {upload(ctx, scene.nodes),     upload(ctx, scene.triangles), upload(ctx, scene.infos),
-                          upload(ctx, scene.normals),   upload(ctx, scene.materials), upload(ctx, scene.lights),
-                          upload(ctx, scene.light_cdf), upload(ctx, scene.env_texels),
-                          upload(ctx, scene.env_distribution)};
+        scene_buffers_ = std::make_unique<SceneBuffers>(ctx, scene);
         splat_slots_ = options.max_depth + 1;
         const size_t bytes_per_item = sizeof(cl_float4) + sizeof(SplatRecord) * size_t(splat_slots_);
         const int pixels = scene.camera.width * scene.camera.height;
@@ -65,11 +54,9 @@ Renderer::Renderer(DeviceContext& device, const DeviceScene& scene, const Render
         splats_ = cl::Buffer(ctx, CL_MEM_WRITE_ONLY, sizeof(SplatRecord) * size_t(batch_items_) * splat_slots_);
         camera_host_.resize(batch_items_);
         splats_host_.resize(size_t(batch_items_) * splat_slots_);
-        for (size_t i = 0; i < scene_buffers_.size(); ++i) kernel_.setArg(cl_uint(i), scene_buffers_[i]);
-        kernel_.setArg(9, scene.camera);
-        kernel_.setArg(10, scene.info);
-        kernel_.setArg(12, camera_out_);
-        kernel_.setArg(13, splats_);
+        scene_buffers_->set_args(kernel_);
+        kernel_.setArg(kParamsArg + 1, camera_out_);
+        kernel_.setArg(kParamsArg + 2, splats_);
     } catch (const cl::Error& e) {
         throw Error(std::string("OpenCL: ") + e.what() + ": " + cl_error_name(e.err()) +
                     " while setting up the render on " + device.entry().name);
@@ -87,7 +74,7 @@ void Renderer::run_batch(Film& film, uint32_t sample_index, int first_pixel, int
     params.max_depth = options_.max_depth;
     cl::CommandQueue& queue = device_.queue();
     try {
-        kernel_.setArg(11, params);
+        kernel_.setArg(kParamsArg, params);
         queue.enqueueNDRangeKernel(kernel_, cl::NullRange, cl::NDRange(size_t(pixel_count)), cl::NullRange);
         queue.enqueueReadBuffer(camera_out_, CL_FALSE, 0, sizeof(cl_float4) * pixel_count, camera_host_.data());
         queue.enqueueReadBuffer(splats_, CL_TRUE, 0, sizeof(SplatRecord) * size_t(pixel_count) * splat_slots_,

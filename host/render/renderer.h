@@ -6,12 +6,14 @@
 
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "device/opencl.h"
 #include "render/device_scene.h"
 #include "render/features.h"
+#include "render/scene_buffers.h"
 
 namespace clbdpt {
 
@@ -68,7 +70,7 @@ private:
     RenderOptions options_;
     RenderStats stats_;
     cl::Kernel kernel_;
-    std::vector<cl::Buffer> scene_buffers_;
+    std::unique_ptr<SceneBuffers> scene_buffers_;
     cl::Buffer camera_out_, splats_;
     int batch_items_ = 0;
     int splat_slots_ = 0;

@@ -1,0 +1,26 @@
+// The device scene uploaded to one OpenCL context, and the kernel arguments every
+// light-transport kernel takes first (SCENE_KERNEL_ARGS in cl/scene.h).
+#pragma once
+
+#include <vector>
+
+#include "device/opencl.h"
+#include "render/device_scene.h"
+
+namespace clbdpt {
+
+class SceneBuffers {
+public:
+    SceneBuffers(cl::Context& context, const DeviceScene& scene);
+
+    // Sets arguments 0 .. kSceneArgCount - 1.
+    void set_args(cl::Kernel& kernel) const;
+
+    static constexpr cl_uint kSceneArgCount = 11;
+
+private:
+    const DeviceScene& scene_;
+    std::vector<cl::Buffer> buffers_;
+};
+
+}  // namespace clbdpt

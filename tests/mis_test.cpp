@@ -1,0 +1,73 @@
+// MIS weights of every strategy that can produce a path sum to 1 (cl/kernels/mis_test.cl),
+// for paths traced by the real random walk in the bundled scenes, for each strategy set.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "render/features.h"
+#include "render/scene_buffers.h"
+#include "render_test_util.h"
+
+namespace clbdpt::test {
+namespace {
+
+struct MisSums {
+    float worst = 0;   // largest |sum of weights - 1|
+    long paths = 0;    // paths checked
+};
+
+MisSums mis_sums(const std::string& name, Integrator integrator, int max_depth, int size, int passes) {
+    Scene scene = load_scene(scene_path(name));
+    DeviceScene ds = build_device_scene(scene, size, size);
+    DeviceContext& device = test_device();
+    const ProgramBuild& build = device.program("kernels/mis_test.cl", kernel_defines(ds, integrator, max_depth));
+    SceneBuffers buffers(device.context(), ds);
+    cl::Kernel kernel(build.program, "mis_weight_sums");
+    buffers.set_args(kernel);
+    const int pixels = size * size;
+    cl::Buffer out(device.context(), CL_MEM_WRITE_ONLY, sizeof(cl_float2) * pixels);
+    std::vector<cl_float2> host(pixels);
+    MisSums result;
+    for (int pass = 0; pass < passes; ++pass) {
+        RenderParams params{};
+        params.width = size;
+        params.height = size;
+        params.pixel_count = pixels;
+        params.sample_index = uint32_t(pass);
+        params.max_depth = max_depth;
+        kernel.setArg(SceneBuffers::kSceneArgCount, params);
+        kernel.setArg(SceneBuffers::kSceneArgCount + 1, out);
+        device.queue().enqueueNDRangeKernel(kernel, cl::NullRange, cl::NDRange(size_t(pixels)), cl::NullRange);
+        device.queue().enqueueReadBuffer(out, CL_TRUE, 0, sizeof(cl_float2) * pixels, host.data());
+        for (const cl_float2& v : host) {
+            result.worst = std::max(result.worst, v.s[0]);
+            result.paths += long(v.s[1]);
+        }
+    }
+    return result;
+}
+
+// Float ratios over at most max_depth + 2 vertices: each weight is 1 / (1 + sum of ratios),
+// good to a few float ulps; 1e-4 leaves room for ~100 ulps of accumulated rounding.
+constexpr float kTolerance = 1e-4f;
+
+// min_paths: how many emitter-ending paths the 64x64x4 camera samples must find for the test
+// to mean something (the lamp's emitter hides in its shade, so few camera paths reach it).
+void check_scene(const std::string& name, int max_depth, long min_paths = 100) {
+    if (!std::filesystem::exists(scene_path(name))) GTEST_SKIP() << name << " is not bundled";
+    for (Integrator integrator : {Integrator::Bdpt, Integrator::Pt, Integrator::Lt}) {
+        MisSums sums = mis_sums(name, integrator, max_depth, 64, 4);
+        EXPECT_GE(sums.paths, min_paths) << name << " " << integrator_name(integrator);
+        EXPECT_LT(sums.worst, kTolerance) << name << " " << integrator_name(integrator) << ": " << sums.paths
+                                          << " paths";
+    }
+}
+
+TEST(MisWeights, SumToOneCornellBox) { check_scene("cornell-box", 5); }
+TEST(MisWeights, SumToOneCornellSpecular) { check_scene("cornell-specular", 8); }
+TEST(MisWeights, SumToOneVeachMis) { check_scene("veach-mis", 5); }
+TEST(MisWeights, SumToOneSky) { check_scene("sky", 5); }
+TEST(MisWeights, SumToOneLampCeiling) { check_scene("lamp-ceiling", 6, 20); }
+
+}  // namespace
+}  // namespace clbdpt::test
