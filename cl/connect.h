@@ -5,8 +5,8 @@
  *                lands at its own raster position (a splat into the light image);
  *   s = 1        a freshly sampled point on a light is joined to the camera subpath's end;
  *   s > 1, t > 1 the two last vertices are joined with a shadow ray and the geometric term.
- * Returns the MIS-weighted contribution; `weight` receives the MIS weight alone (for the
- * strategy images) and `raster` the splat position when t = 1. */
+ * Returns the contribution before MIS weighting; `weight` receives the MIS weight (0 when there
+ * is no contribution) and `raster` the splat position when t = 1. */
 #ifndef CLBDPT_CONNECT_H
 #define CLBDPT_CONNECT_H
 
@@ -78,7 +78,7 @@ inline float3 connect_bdpt(const SceneData* scene, Rng* rng, const PathVertex* l
     }
     if (is_black(L)) return L;
     *weight = mis_weight(scene, light_path, camera_path, &sampled, s, t);
-    return L * *weight;
+    return L;
 }
 
 #endif

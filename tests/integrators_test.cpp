@@ -73,3 +73,35 @@ TEST(Integrators, ImageDoesNotDependOnBatching) {
 
 }  // namespace
 }  // namespace clbdpt::test
+
+namespace clbdpt::test {
+namespace {
+
+// The strategy images split the image: their sum is the image (up to float rounding of the
+// per-sample products), and with --unweighted each is an unbiased estimate of the whole
+// depth's contribution, so pt-reachable strategies of one depth agree with their weighted sum.
+TEST(Integrators, StrategyImagesSumToTheImage) {
+    DeviceScene scene = build_device_scene(load_scene(scene_path("cornell-box")), 24, 24);
+    RenderOptions options;
+    options.max_depth = 3;
+    options.strategy_images = RenderOptions::StrategyImages::Weighted;
+    Renderer renderer(test_device(), scene, options);
+    Film film(24, 24);
+    renderer.render_passes(film, 0, 4);
+    std::vector<float> image = film.image();
+    std::vector<double> sum(image.size(), 0.0);
+    for (int depth = 0; depth <= options.max_depth; ++depth)
+        for (int t = 1; t <= depth + 2; ++t) {
+            std::vector<float> part = film.strategy_image(depth + 2 - t, t);
+            for (size_t i = 0; i < sum.size(); ++i) sum[i] += part[i];
+        }
+    double total = 0;
+    for (size_t i = 0; i < sum.size(); ++i) {
+        EXPECT_NEAR(sum[i], image[i], 1e-5 * (1.0 + std::fabs(image[i]))) << "channel value " << i;
+        total += image[i];
+    }
+    EXPECT_GT(total, 0.0);
+}
+
+}  // namespace
+}  // namespace clbdpt::test

@@ -15,8 +15,17 @@
 
 #define SPLAT_SLOTS (MAX_DEPTH + 1)
 
+/* --strategy-images: every (s, t) contribution is also recorded in its own slot
+ * s * STRATEGY_STRIDE + t (own pixel for t > 1, the splat's for t = 1). */
+#define STRATEGY_STRIDE (MAX_DEPTH + 3)
+#define STRATEGY_SLOTS ((MAX_DEPTH + 2) * STRATEGY_STRIDE)
+
 __kernel void render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, __global float4* camera_out,
-                          __global SplatRecord* splats) {
+                          __global SplatRecord* splats
+#ifdef STRATEGY_IMAGES
+                          , __global SplatRecord* strategy_records
+#endif
+) {
     int gid = get_global_id(0);
     if (gid >= params.pixel_count) return;
     uint rays_traced = 0;
@@ -36,6 +45,11 @@ __kernel void render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, __global float
     __global SplatRecord* my_splats = splats + (size_t)gid * SPLAT_SLOTS;
     for (int k = 0; k < SPLAT_SLOTS; ++k) my_splats[k].pixel = -1;
 
+#ifdef STRATEGY_IMAGES
+    __global SplatRecord* my_strategies = strategy_records + (size_t)gid * STRATEGY_SLOTS;
+    for (int k = 0; k < STRATEGY_SLOTS; ++k) my_strategies[k].pixel = -1;
+#endif
+
     float3 L = (float3)(0.0f);
     for (int t = 1; t <= n_camera; ++t) {
         for (int s = 0; s <= n_light; ++s) {
@@ -44,19 +58,34 @@ __kernel void render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, __global float
             if (!strategy_enabled(s, t, light_is_area)) continue;
             float2 splat_raster;
             float weight;
-            float3 c = connect_bdpt(&scene, &rng, light_path, camera_path, s, t, &splat_raster, &weight);
-            if (is_black(c)) continue;
+            float3 unweighted = connect_bdpt(&scene, &rng, light_path, camera_path, s, t, &splat_raster, &weight);
+            if (is_black(unweighted)) continue;
+            float3 c = unweighted * weight;
+            int target = pixel;
             if (t == 1) {
                 int sx = min((int)splat_raster.x, params.width - 1);
                 int sy = min((int)splat_raster.y, params.height - 1);
+                target = sy * params.width + sx;
                 __global SplatRecord* rec = &my_splats[s - 1];
                 rec->r = c.x;
                 rec->g = c.y;
                 rec->b = c.z;
-                rec->pixel = sy * params.width + sx;
+                rec->pixel = target;
             } else {
                 L += c;
             }
+#ifdef STRATEGY_IMAGES
+            __global SplatRecord* srec = &my_strategies[s * STRATEGY_STRIDE + t];
+#ifdef STRATEGY_IMAGES_UNWEIGHTED
+            float3 shown = unweighted;
+#else
+            float3 shown = c;
+#endif
+            srec->r = shown.x;
+            srec->g = shown.y;
+            srec->b = shown.z;
+            srec->pixel = target;
+#endif
         }
     }
     camera_out[gid] = (float4)(L.x, L.y, L.z, (float)rays_traced);

@@ -5,6 +5,7 @@
 
 #include <CLI/CLI.hpp>
 #include <chrono>
+#include <filesystem>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
@@ -36,6 +37,8 @@ struct RenderArgs {
     std::string stats;
     std::string integrator = "bdpt";
     std::string aov;
+    std::string strategy_images;
+    bool unweighted = false;
     bool verbose = false;
     bool all_features = false;
 };
@@ -109,6 +112,20 @@ private:
     bool shown_ = false;
 };
 
+// One EXR per (s, t) with s + t - 2 <= max_depth: DIR/s<s>_t<t>.exr (pbrt's
+// visualizestrategies). Strategies an integrator does not use come out black.
+void write_strategy_images(const std::string& dir, const Film& film, int max_depth, const ImageMetadata& meta) {
+    std::error_code ec;
+    std::filesystem::create_directories(dir, ec);
+    if (ec) throw Error("cannot create directory '" + dir + "': " + ec.message());
+    for (int depth = 0; depth <= max_depth; ++depth)
+        for (int t = 1; t <= depth + 2; ++t) {
+            int s = depth + 2 - t;
+            std::string path = dir + "/s" + std::to_string(s) + "_t" + std::to_string(t) + ".exr";
+            write_image(path, film.width, film.height, film.strategy_image(s, t), meta);
+        }
+}
+
 int run_render(const RenderArgs& args) {
     Scene scene = load_scene(args.scene);
     for (const std::string& w : scene.warnings) std::fprintf(stderr, "clbdpt: warning: %s\n", w.c_str());
@@ -126,6 +143,11 @@ int run_render(const RenderArgs& args) {
     options.max_depth = args.max_depth >= 0 ? args.max_depth : scene.render.max_depth;
     options.seed = args.seed >= 0 ? uint32_t(args.seed) : scene.render.seed;
     options.all_features = args.all_features;
+    if (!args.strategy_images.empty())
+        options.strategy_images = args.unweighted ? RenderOptions::StrategyImages::Unweighted
+                                                  : RenderOptions::StrategyImages::Weighted;
+    else if (args.unweighted)
+        throw Error("--unweighted needs --strategy-images DIR");
     if (options.spp < 1 && options.time_budget <= 0) throw Error("--spp must be at least 1");
     int aov = args.aov.empty() ? -1 : parse_aov(args.aov);
 
@@ -169,6 +191,7 @@ int run_render(const RenderArgs& args) {
     meta.strings.push_back({"clbdpt:seed", std::to_string(options.seed)});
     meta.strings.push_back({"clbdpt:seconds", std::to_string(st.seconds)});
     write_image(output, width, height, film.image(), meta);
+    if (!args.strategy_images.empty()) write_strategy_images(args.strategy_images, film, options.max_depth, meta);
 
     const double sps = st.seconds > 0 ? double(st.samples) / st.seconds : 0;
     const double rps = st.seconds > 0 ? double(st.rays) / st.seconds : 0;
@@ -231,6 +254,9 @@ int main(int argc, char** argv) {
         ->check(CLI::IsMember({"bdpt", "pt", "lt"}));
     render->add_option("--aov", args.aov, "Debug render of the first hit: normal, albedo or depth")
         ->check(CLI::IsMember({"normal", "albedo", "depth"}));
+    render->add_option("--strategy-images", args.strategy_images,
+                       "Also write each (s,t) strategy's MIS-weighted contribution as DIR/s<s>_t<t>.exr");
+    render->add_flag("--unweighted", args.unweighted, "With --strategy-images: write the contributions before MIS");
     render->add_flag("--all-features", args.all_features, "Build the kernel with every feature enabled (benchmarks)");
     render->add_flag("-v,--verbose", args.verbose, "Print device, BVH and kernel flags");
 

@@ -32,10 +32,25 @@ std::vector<float> Film::image() const {
     return out;
 }
 
+std::vector<float> Film::strategy_image(int s, int t) const {
+    const size_t pixels = size_t(width) * height;
+    const size_t base = (size_t(s) * strategy_stride + t) * pixels * 3;
+    std::vector<float> out(pixels * 3);
+    const double inv = spp > 0 ? 1.0 / spp : 0.0;
+    for (size_t i = 0; i < out.size(); ++i) out[i] = float(strategy_sum[base + i] * inv);
+    return out;
+}
+
 Renderer::Renderer(DeviceContext& device, const DeviceScene& scene, const RenderOptions& options)
     : device_(device), scene_(scene), options_(options) {
     if (options.max_depth < 0) throw Error("--max-depth must be >= 0");
     stats_.defines = kernel_defines(scene, options.integrator, options.max_depth, options.all_features);
+    if (options.strategy_images != RenderOptions::StrategyImages::Off) {
+        stats_.defines.push_back("STRATEGY_IMAGES");
+        if (options.strategy_images == RenderOptions::StrategyImages::Unweighted)
+            stats_.defines.push_back("STRATEGY_IMAGES_UNWEIGHTED");
+        strategy_slots_ = (options.max_depth + 2) * (options.max_depth + 3);
+    }
     const ProgramBuild& build = device.program("kernels/render.cl", stats_.defines);
     stats_.build_seconds = build.seconds;
     stats_.program_from_cache = build.from_cache;
@@ -44,7 +59,7 @@ Renderer::Renderer(DeviceContext& device, const DeviceScene& scene, const Render
         cl::Context& ctx = device.context();
         scene_buffers_ = std::make_unique<SceneBuffers>(ctx, scene);
         splat_slots_ = options.max_depth + 1;
-        const size_t bytes_per_item = sizeof(cl_float4) + sizeof(SplatRecord) * size_t(splat_slots_);
+        const size_t bytes_per_item = sizeof(cl_float4) + sizeof(SplatRecord) * size_t(splat_slots_ + strategy_slots_);
         const int pixels = scene.camera.width * scene.camera.height;
         size_t limit = std::min<size_t>(kMaxBatchBytes, device.entry().max_alloc) / bytes_per_item;
         batch_items_ = int(std::min<size_t>({size_t(pixels), size_t(kMaxBatchItems), limit}));
@@ -52,6 +67,11 @@ Renderer::Renderer(DeviceContext& device, const DeviceScene& scene, const Render
         batch_items_ = std::max(batch_items_, 1);
         camera_out_ = cl::Buffer(ctx, CL_MEM_WRITE_ONLY, sizeof(cl_float4) * batch_items_);
         splats_ = cl::Buffer(ctx, CL_MEM_WRITE_ONLY, sizeof(SplatRecord) * size_t(batch_items_) * splat_slots_);
+        if (strategy_slots_ > 0) {
+            strategy_out_ = cl::Buffer(ctx, CL_MEM_WRITE_ONLY, sizeof(SplatRecord) * size_t(batch_items_) * strategy_slots_);
+            strategy_host_.resize(size_t(batch_items_) * strategy_slots_);
+            kernel_.setArg(kParamsArg + 3, strategy_out_);
+        }
         camera_host_.resize(batch_items_);
         splats_host_.resize(size_t(batch_items_) * splat_slots_);
         scene_buffers_->set_args(kernel_);
@@ -79,6 +99,9 @@ void Renderer::run_batch(Film& film, uint32_t sample_index, int first_pixel, int
         queue.enqueueReadBuffer(camera_out_, CL_FALSE, 0, sizeof(cl_float4) * pixel_count, camera_host_.data());
         queue.enqueueReadBuffer(splats_, CL_TRUE, 0, sizeof(SplatRecord) * size_t(pixel_count) * splat_slots_,
                                 splats_host_.data());
+        if (strategy_slots_ > 0)
+            queue.enqueueReadBuffer(strategy_out_, CL_TRUE, 0,
+                                    sizeof(SplatRecord) * size_t(pixel_count) * strategy_slots_, strategy_host_.data());
     } catch (const cl::Error& e) {
         throw Error(std::string("OpenCL: ") + e.what() + ": " + cl_error_name(e.err()) + " while rendering on " +
                     device_.entry().name);
@@ -107,6 +130,21 @@ void Renderer::run_batch(Film& film, uint32_t sample_index, int first_pixel, int
         dst[0] += r.r;
         dst[1] += r.g;
         dst[2] += r.b;
+    }
+    if (strategy_slots_ > 0) {
+        const size_t pixels = size_t(film.width) * film.height;
+        if (film.strategy_sum.empty()) {
+            film.strategy_sum.assign(pixels * 3 * strategy_slots_, 0.0);
+            film.strategy_stride = options_.max_depth + 3;
+        }
+        for (size_t k = 0; k < size_t(pixel_count) * strategy_slots_; ++k) {
+            const SplatRecord& r = strategy_host_[k];
+            if (r.pixel < 0) continue;
+            double* dst = &film.strategy_sum[((k % strategy_slots_) * pixels + size_t(r.pixel)) * 3];
+            dst[0] += r.r;
+            dst[1] += r.g;
+            dst[2] += r.b;
+        }
     }
     stats_.samples += uint64_t(pixel_count);
 }

@@ -25,6 +25,8 @@ struct RenderOptions {
     uint32_t seed = 0;
     bool all_features = false;  // build the unspecialised kernel
     int batch_items = 0;        // work items per launch; 0 = automatic
+    enum class StrategyImages { Off, Weighted, Unweighted };
+    StrategyImages strategy_images = StrategyImages::Off;  // also record each (s, t) apart
     // Called after each pass: passes done, passes planned (0 if time-bound), seconds so far.
     std::function<void(int, int, double)> progress;
 };
@@ -36,9 +38,14 @@ struct Film {
     int spp = 0;
     std::vector<double> camera_sum;  // rgb per pixel
     std::vector<double> light_sum;   // rgb per pixel, t = 1 splats
+    // With strategy images: rgb per pixel for each (s, t), strategy_slot(s, t) major.
+    std::vector<double> strategy_sum;
+    int strategy_stride = 0;  // max_depth + 3
 
     Film(int w, int h) : width(w), height(h), camera_sum(size_t(w) * h * 3), light_sum(size_t(w) * h * 3) {}
     std::vector<float> image() const;
+    // The image of strategy (s, t) alone (sum / spp); requires strategy images.
+    std::vector<float> strategy_image(int s, int t) const;
 };
 
 struct RenderStats {
@@ -71,11 +78,13 @@ private:
     RenderStats stats_;
     cl::Kernel kernel_;
     std::unique_ptr<SceneBuffers> scene_buffers_;
-    cl::Buffer camera_out_, splats_;
+    cl::Buffer camera_out_, splats_, strategy_out_;
     int batch_items_ = 0;
     int splat_slots_ = 0;
     std::vector<cl_float4> camera_host_;
     std::vector<SplatRecord> splats_host_;
+    std::vector<SplatRecord> strategy_host_;
+    int strategy_slots_ = 0;
 };
 
 }  // namespace clbdpt
