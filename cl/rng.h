@@ -1,7 +1,17 @@
-/* Counter-based random numbers: every value is a hash of (seed, pixel, sample index,
- * dimension), so an image does not depend on how work is split across work-groups, launches
- * or devices, and any sample can be recomputed on its own (STYLE.md, "Tests that prove
- * something"). */
+/* The stream of sample values a work item draws, one "dimension" per call. Every value is a
+ * function of (seed, pixel, sample index, dimension) alone, so an image does not depend on how
+ * work is split across work-groups, launches or devices, and any sample can be recomputed on
+ * its own (STYLE.md, "Tests that prove something").
+ *
+ * Two samplers (the kernel is built with one):
+ *   independent (default)  a hash of (seed, pixel, sample, dimension): uniform random numbers;
+ *   SAMPLER_SOBOL          padded Owen-scrambled Sobol (Burley 2020, "Practical Hash-based Owen
+ *                          Scrambling"; pbrt-v4 PaddedSobolSampler): every 1D or 2D draw gets its
+ *                          own pair of the (0,2)-sequence — the first two Sobol dimensions —
+ *                          with the sample index shuffled and the values Owen-scrambled by
+ *                          hashes of (pixel, draw), so each 2D decision of a path (pixel
+ *                          position, lens, BSDF direction, light point) is stratified across
+ *                          a pixel's samples and draws are decorrelated from each other. */
 #ifndef CLBDPT_RNG_H
 #define CLBDPT_RNG_H
 
@@ -16,22 +26,90 @@ inline uint hash_u32(uint x) {
 }
 
 typedef struct {
-    uint key;       /* hash of (seed, pixel, sample) */
-    uint dimension; /* how many numbers this sample has drawn */
+    uint key;          /* hash of (seed, pixel); the sample index is mixed in per draw */
+    uint sample_index;
+    uint dimension;    /* draws made so far */
 } Rng;
 
 inline Rng rng_init(uint pixel, uint sample_index, uint seed) {
     Rng rng;
-    rng.key = hash_u32(hash_u32(hash_u32(seed ^ 0x5bd1e995u) ^ pixel) ^ hash_u32(sample_index + 0x68e31da4u));
+    rng.key = hash_u32(hash_u32(seed ^ 0x5bd1e995u) ^ pixel);
+    rng.sample_index = sample_index;
     rng.dimension = 0;
     return rng;
 }
 
-/* Uniform in [0, 1): the top 24 bits, so 1.0f can never come out. */
+/* The stream of a light subpath. Light subpaths belong to no pixel (their t = 1 contributions
+ * land anywhere), so they are numbered across the image, sample index major, and drawn from
+ * one image-wide sequence: with the Sobol sampler the light subpaths of a pass are then
+ * stratified as a set, which is what lowers the variance of the light image. (The 64-bit path
+ * number's high word picks the scramble, so numbering never wraps onto itself.) */
+inline Rng rng_init_light_subpath(uint pixel, uint pixel_count, uint sample_index, uint seed) {
+    ulong n = (ulong)sample_index * (ulong)pixel_count + (ulong)pixel;
+    Rng rng;
+    rng.key = hash_u32(hash_u32(seed ^ 0x2545f491u) ^ hash_u32((uint)(n >> 32) + 0x3c6ef372u));
+    rng.sample_index = (uint)n;
+    rng.dimension = 0;
+    return rng;
+}
+
+/* 32 random bits -> [0, 1): the top 24 bits, so 1.0f can never come out. */
+inline float bits_to_unit_float(uint bits) { return (float)(bits >> 8) * (1.0f / 16777216.0f); }
+
+#ifdef SAMPLER_SOBOL
+
+inline uint reverse_bits(uint x) {
+    x = ((x >> 1) & 0x55555555u) | ((x & 0x55555555u) << 1);
+    x = ((x >> 2) & 0x33333333u) | ((x & 0x33333333u) << 2);
+    x = ((x >> 4) & 0x0f0f0f0fu) | ((x & 0x0f0f0f0fu) << 4);
+    x = ((x >> 8) & 0x00ff00ffu) | ((x & 0x00ff00ffu) << 8);
+    return (x >> 16) | (x << 16);
+}
+
+/* Nested uniform (Owen) scrambling in base 2: a hash that only lets each bit depend on the
+ * bits above it, applied to the bit-reversed value (Laine-Karras style; constants from
+ * pbrt-v4's FastOwenScrambler). */
+inline uint owen_scramble(uint v, uint seed) {
+    v = reverse_bits(v);
+    v ^= v * 0x3d20adeau;
+    v += seed;
+    v *= (seed >> 16) | 1u;
+    v ^= v * 0x05526c56u;
+    v ^= v * 0x53a22864u;
+    return reverse_bits(v);
+}
+
+/* Second Sobol dimension: generator matrix columns v_1 = 2^31, v_{k+1} = v_k ^ (v_k >> 1)
+ * (the Pascal matrix mod 2; the first dimension is the bit reversal). */
+inline uint sobol_dimension1(uint index) {
+    uint x = 0, v = 0x80000000u;
+    for (; index != 0; index >>= 1, v ^= v >> 1)
+        if (index & 1u) x ^= v;
+    return x;
+}
+
+/* Both components of draw `draw` for this sample. */
+inline float2 sobol_pair(const Rng* rng, uint draw) {
+    uint seed = hash_u32(rng->key ^ hash_u32(draw + 0x632be5abu));
+    /* Shuffling the index with a nested uniform scramble keeps every power-of-two prefix of a
+     * pixel's samples a (0,2)-net, whatever spp is rendered. */
+    uint index = owen_scramble(rng->sample_index, seed);
+    uint x = owen_scramble(reverse_bits(index), hash_u32(seed ^ 0xa511e9b3u));
+    uint y = owen_scramble(sobol_dimension1(index), hash_u32(seed ^ 0x63d83595u));
+    return (float2)(bits_to_unit_float(x), bits_to_unit_float(y));
+}
+
+inline float rng_next(Rng* rng) { return sobol_pair(rng, rng->dimension++).x; }
+
+inline float2 rng_next2(Rng* rng) { return sobol_pair(rng, rng->dimension++); }
+
+#else
+
 inline float rng_next(Rng* rng) {
-    uint bits = hash_u32(rng->key ^ hash_u32(rng->dimension * 0x9e3779b9u + 0x632be5abu));
+    uint sample_key = hash_u32(rng->key ^ hash_u32(rng->sample_index + 0x68e31da4u));
+    uint bits = hash_u32(sample_key ^ hash_u32(rng->dimension * 0x9e3779b9u + 0x632be5abu));
     rng->dimension++;
-    return (float)(bits >> 8) * (1.0f / 16777216.0f);
+    return bits_to_unit_float(bits);
 }
 
 inline float2 rng_next2(Rng* rng) {
@@ -39,5 +117,7 @@ inline float2 rng_next2(Rng* rng) {
     float b = rng_next(rng);
     return (float2)(a, b);
 }
+
+#endif
 
 #endif

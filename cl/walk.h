@@ -85,7 +85,9 @@ inline int random_walk(const SceneData* scene, Rng* rng, float3 o, float3 d, flo
         ++bounces;
         if (vertex->type == VERTEX_LIGHT || bounces >= max_vertices) break;
 
-        float3 u = (float3)(rng_next(rng), rng_next(rng), rng_next(rng));
+        float u_lobe = rng_next(rng);
+        float2 u_dir = rng_next2(rng);
+        float3 u = (float3)(u_lobe, u_dir.x, u_dir.y);
         Bsdf b = vertex_bsdf(scene, vertex);
         BsdfSample bs;
         if (!bsdf_sample(&b, vertex->wo, u, mode, &bs) || is_black(bs.f)) break;

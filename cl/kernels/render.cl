@@ -20,6 +20,12 @@
 #define STRATEGY_STRIDE (MAX_DEPTH + 3)
 #define STRATEGY_SLOTS ((MAX_DEPTH + 2) * STRATEGY_STRIDE)
 
+/* Fixed sample dimensions per decision, so the same decision of every sample of a pixel uses
+ * the same dimension whatever the subpaths did (what keeps a QMC sampler stratified): the
+ * camera subpath draws 2 + 2 per vertex, then each (s, t) connection 2. The light subpath has
+ * its own image-wide stream (rng_init_light_subpath). */
+#define DIMS_CONNECTIONS (2 + 2 * (MAX_DEPTH + 2))
+
 __kernel void render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, __global float4* camera_out,
                           __global SplatRecord* splats
 #ifdef STRATEGY_IMAGES
@@ -39,7 +45,8 @@ __kernel void render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, __global float
     PathVertex camera_path[MAX_DEPTH + 2];
     PathVertex light_path[MAX_DEPTH + 1];
     int n_camera = generate_camera_subpath(&scene, &rng, raster, MAX_DEPTH, camera_path);
-    int n_light = generate_light_subpath(&scene, &rng, MAX_DEPTH, light_path);
+    Rng light_rng = rng_init_light_subpath((uint)pixel, (uint)(params.width * params.height), params.sample_index, params.seed);
+    int n_light = generate_light_subpath(&scene, &light_rng, MAX_DEPTH, light_path);
     int light_is_area = n_light > 0 && lights[light_path[0].light].kind == LIGHT_AREA;
 
     __global SplatRecord* my_splats = splats + (size_t)gid * SPLAT_SLOTS;
@@ -58,6 +65,7 @@ __kernel void render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, __global float
             if (!strategy_enabled(s, t, light_is_area)) continue;
             float2 splat_raster;
             float weight;
+            rng.dimension = DIMS_CONNECTIONS + 2 * (s * STRATEGY_STRIDE + t);
             float3 unweighted = connect_bdpt(&scene, &rng, light_path, camera_path, s, t, &splat_raster, &weight);
             if (is_black(unweighted)) continue;
             float3 c = unweighted * weight;

@@ -36,9 +36,11 @@ struct RenderArgs {
     int height = 0;
     std::string stats;
     std::string integrator = "bdpt";
+    std::string sampler = "independent";
     std::string aov;
     std::string strategy_images;
     bool unweighted = false;
+    int local_size = 0;
     bool verbose = false;
     bool all_features = false;
 };
@@ -138,11 +140,13 @@ int run_render(const RenderArgs& args) {
 
     RenderOptions options;
     options.integrator = parse_integrator(args.integrator);
+    options.sampler = parse_sampler(args.sampler);
     options.spp = args.spp >= 0 ? args.spp : scene.render.spp;
     options.time_budget = args.time_budget;
     options.max_depth = args.max_depth >= 0 ? args.max_depth : scene.render.max_depth;
     options.seed = args.seed >= 0 ? uint32_t(args.seed) : scene.render.seed;
     options.all_features = args.all_features;
+    options.local_size = args.local_size;
     if (!args.strategy_images.empty())
         options.strategy_images = args.unweighted ? RenderOptions::StrategyImages::Unweighted
                                                   : RenderOptions::StrategyImages::Weighted;
@@ -186,6 +190,7 @@ int run_render(const RenderArgs& args) {
     const RenderStats& st = renderer.stats();
 
     meta.strings.push_back({"clbdpt:integrator", integrator_name(options.integrator)});
+    meta.strings.push_back({"clbdpt:sampler", sampler_name(options.sampler)});
     meta.strings.push_back({"clbdpt:spp", std::to_string(film.spp)});
     meta.strings.push_back({"clbdpt:max_depth", std::to_string(options.max_depth)});
     meta.strings.push_back({"clbdpt:seed", std::to_string(options.seed)});
@@ -200,6 +205,7 @@ int run_render(const RenderArgs& args) {
         j["scene"] = args.scene;
         j["output"] = output;
         j["integrator"] = integrator_name(options.integrator);
+        j["sampler"] = sampler_name(options.sampler);
         j["width"] = width;
         j["height"] = height;
         j["spp"] = film.spp;
@@ -252,12 +258,17 @@ int main(int argc, char** argv) {
     render->add_option("--stats", args.stats, "Write a JSON summary (spp, seconds, samples/s, rays/s, ...)");
     render->add_option("--integrator", args.integrator, "bdpt (all strategies), pt (s <= 1) or lt (t = 1)")
         ->check(CLI::IsMember({"bdpt", "pt", "lt"}));
+    render->add_option("--sampler", args.sampler,
+                       "independent (uniform random numbers) or sobol (padded Owen-scrambled Sobol)")
+        ->check(CLI::IsMember({"independent", "sobol"}));
     render->add_option("--aov", args.aov, "Debug render of the first hit: normal, albedo or depth")
         ->check(CLI::IsMember({"normal", "albedo", "depth"}));
     render->add_option("--strategy-images", args.strategy_images,
                        "Also write each (s,t) strategy's MIS-weighted contribution as DIR/s<s>_t<t>.exr");
     render->add_flag("--unweighted", args.unweighted, "With --strategy-images: write the contributions before MIS");
     render->add_flag("--all-features", args.all_features, "Build the kernel with every feature enabled (benchmarks)");
+    render->add_option("--local-size", args.local_size, "OpenCL work-group size (default: the driver's choice)")
+        ->check(CLI::PositiveNumber);
     render->add_flag("-v,--verbose", args.verbose, "Print device, BVH and kernel flags");
 
     try {

@@ -19,8 +19,16 @@ Integrator parse_integrator(const std::string& name) {
     throw Error("unknown integrator '" + name + "' (expected bdpt, pt or lt)");
 }
 
+const char* sampler_name(SamplerKind sampler) { return sampler == SamplerKind::Sobol ? "sobol" : "independent"; }
+
+SamplerKind parse_sampler(const std::string& name) {
+    if (name == "independent") return SamplerKind::Independent;
+    if (name == "sobol") return SamplerKind::Sobol;
+    throw Error("unknown sampler '" + name + "' (expected independent or sobol)");
+}
+
 std::vector<std::string> kernel_defines(const DeviceScene& scene, Integrator integrator, int max_depth,
-                                        bool all_features) {
+                                        bool all_features, SamplerKind sampler) {
     bool area = false, point = false, spot = false, directional = false, environment = false;
     for (const Light& l : scene.lights) {
         area |= l.kind == LIGHT_AREA;
@@ -42,6 +50,7 @@ std::vector<std::string> kernel_defines(const DeviceScene& scene, Integrator int
     std::vector<std::string> d;
     d.push_back("MAX_DEPTH=" + std::to_string(max_depth));
     d.push_back("INTEGRATOR=" + std::to_string(int(integrator)));
+    if (sampler == SamplerKind::Sobol) d.push_back("SAMPLER_SOBOL");
     auto flag = [&](bool on, const char* name) {
         if (on || all_features) d.push_back(name);
     };

@@ -15,8 +15,13 @@ enum class Integrator { Bdpt = 0, Pt = 1, Lt = 2 };
 const char* integrator_name(Integrator integrator);
 Integrator parse_integrator(const std::string& name);  // throws Error
 
+enum class SamplerKind { Independent = 0, Sobol = 1 };
+
+const char* sampler_name(SamplerKind sampler);
+SamplerKind parse_sampler(const std::string& name);  // throws Error
+
 // all_features: every HAS_* flag on (the unspecialised build, for benchmarks and tests).
 std::vector<std::string> kernel_defines(const DeviceScene& scene, Integrator integrator, int max_depth,
-                                        bool all_features = false);
+                                        bool all_features = false, SamplerKind sampler = SamplerKind::Independent);
 
 }  // namespace clbdpt

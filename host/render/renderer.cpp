@@ -44,7 +44,7 @@ std::vector<float> Film::strategy_image(int s, int t) const {
 Renderer::Renderer(DeviceContext& device, const DeviceScene& scene, const RenderOptions& options)
     : device_(device), scene_(scene), options_(options) {
     if (options.max_depth < 0) throw Error("--max-depth must be >= 0");
-    stats_.defines = kernel_defines(scene, options.integrator, options.max_depth, options.all_features);
+    stats_.defines = kernel_defines(scene, options.integrator, options.max_depth, options.all_features, options.sampler);
     if (options.strategy_images != RenderOptions::StrategyImages::Off) {
         stats_.defines.push_back("STRATEGY_IMAGES");
         if (options.strategy_images == RenderOptions::StrategyImages::Unweighted)
@@ -95,7 +95,13 @@ void Renderer::run_batch(Film& film, uint32_t sample_index, int first_pixel, int
     cl::CommandQueue& queue = device_.queue();
     try {
         kernel_.setArg(kParamsArg, params);
-        queue.enqueueNDRangeKernel(kernel_, cl::NullRange, cl::NDRange(size_t(pixel_count)), cl::NullRange);
+        if (options_.local_size > 0) {
+            const size_t local = size_t(options_.local_size);
+            const size_t global = (size_t(pixel_count) + local - 1) / local * local;
+            queue.enqueueNDRangeKernel(kernel_, cl::NullRange, cl::NDRange(global), cl::NDRange(local));
+        } else {
+            queue.enqueueNDRangeKernel(kernel_, cl::NullRange, cl::NDRange(size_t(pixel_count)), cl::NullRange);
+        }
         queue.enqueueReadBuffer(camera_out_, CL_FALSE, 0, sizeof(cl_float4) * pixel_count, camera_host_.data());
         queue.enqueueReadBuffer(splats_, CL_TRUE, 0, sizeof(SplatRecord) * size_t(pixel_count) * splat_slots_,
                                 splats_host_.data());

@@ -19,12 +19,14 @@ namespace clbdpt {
 
 struct RenderOptions {
     Integrator integrator = Integrator::Bdpt;
+    SamplerKind sampler = SamplerKind::Independent;
     int spp = 16;
     double time_budget = 0;  // seconds; > 0: render whole passes until spent (spp is then ignored)
     int max_depth = 5;
     uint32_t seed = 0;
     bool all_features = false;  // build the unspecialised kernel
     int batch_items = 0;        // work items per launch; 0 = automatic
+    int local_size = 0;         // work-group size; 0 = the driver's choice
     enum class StrategyImages { Off, Weighted, Unweighted };
     StrategyImages strategy_images = StrategyImages::Off;  // also record each (s, t) apart
     // Called after each pass: passes done, passes planned (0 if time-bound), seconds so far.
