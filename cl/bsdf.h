@@ -69,8 +69,8 @@ inline float3 ggx_sample_wh(float2 u, float alpha) {
     float tan2 = alpha * alpha * u.x / (1.0f - u.x);
     float cos_theta = 1.0f / sqrt(1.0f + tan2);
     float sin_theta = sqrt(fmax(0.0f, 1.0f - cos_theta * cos_theta));
-    float phi = 2.0f * PI_F * u.y;
-    return (float3)(sin_theta * cos(phi), sin_theta * sin(phi), cos_theta);
+    float2 cs = unit_circle(2.0f * PI_F * u.y);
+    return (float3)(sin_theta * cs.x, sin_theta * cs.y, cos_theta);
 }
 
 /* Glossy lobe in the shading frame; wo and wi on the same side (either side). */

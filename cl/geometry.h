@@ -6,6 +6,13 @@
 #define INV_PI_F 0.31830988618379067154f
 #define INV_4PI_F 0.07957747154594766788f
 
+/* (cos a, sin a) with one argument reduction instead of two. */
+inline float2 unit_circle(float a) {
+    float c;
+    float s = sincos(a, &c);
+    return (float2)(c, s);
+}
+
 inline float3 xyz(float4 v) { return (float3)(v.x, v.y, v.z); }
 
 inline float luminance(float3 c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }

@@ -65,9 +65,8 @@ inline float spot_falloff(__global const Light* light, float3 w) {
  * Directions: theta from +y (v = theta / pi), phi from +x toward +z (u = phi / 2 pi). */
 
 inline float3 env_direction(float2 uv) {
-    float theta = uv.y * PI_F, phi = uv.x * 2.0f * PI_F;
-    float sin_theta = sin(theta);
-    return (float3)(sin_theta * cos(phi), cos(theta), sin_theta * sin(phi));
+    float2 theta_cs = unit_circle(uv.y * PI_F), phi_cs = unit_circle(uv.x * 2.0f * PI_F);
+    return (float3)(theta_cs.y * phi_cs.x, theta_cs.x, theta_cs.y * phi_cs.y);
 }
 
 inline float2 env_uv(float3 w) {

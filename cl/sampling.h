@@ -16,7 +16,7 @@ inline float2 sample_concentric_disk(float2 u) {
         r = o.y;
         theta = (PI_F / 2.0f) - (PI_F / 4.0f) * (o.x / o.y);
     }
-    return r * (float2)(cos(theta), sin(theta));
+    return r * unit_circle(theta);
 }
 
 /* Cosine-weighted direction about +z; density cos(theta) / pi. */
@@ -31,16 +31,16 @@ inline float cosine_hemisphere_pdf(float cos_theta) { return fmax(cos_theta, 0.0
 inline float3 sample_uniform_sphere(float2 u) {
     float z = 1.0f - 2.0f * u.x;
     float r = sqrt(fmax(0.0f, 1.0f - z * z));
-    float phi = 2.0f * PI_F * u.y;
-    return (float3)(r * cos(phi), r * sin(phi), z);
+    float2 cs = unit_circle(2.0f * PI_F * u.y);
+    return (float3)(r * cs.x, r * cs.y, z);
 }
 
 /* Uniform direction inside a cone about +z with the given cosine of its half angle. */
 inline float3 sample_uniform_cone(float2 u, float cos_max) {
     float cos_theta = (1.0f - u.x) + u.x * cos_max;
     float sin_theta = sqrt(fmax(0.0f, 1.0f - cos_theta * cos_theta));
-    float phi = u.y * 2.0f * PI_F;
-    return (float3)(cos(phi) * sin_theta, sin(phi) * sin_theta, cos_theta);
+    float2 cs = unit_circle(u.y * 2.0f * PI_F);
+    return (float3)(cs.x * sin_theta, cs.y * sin_theta, cos_theta);
 }
 
 inline float uniform_cone_pdf(float cos_max) { return 1.0f / (2.0f * PI_F * (1.0f - cos_max)); }

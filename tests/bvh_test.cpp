@@ -258,63 +258,89 @@ std::vector<Ray> random_rays(int count, uint32_t seed, float extent, float tmax)
 
 // ---- Checks ------------------------------------------------------------------------------------
 
-// Walks the flattened tree and checks its invariants; returns the number of leaves.
-void check_invariants(const Bvh& bvh, const std::vector<Triangle>& tris_bvh_order) {
-    const size_t n = tris_bvh_order.size();
-    ASSERT_EQ(bvh.order.size(), n);
-    std::vector<uint32_t> sorted = bvh.order;
-    std::sort(sorted.begin(), sorted.end());
-    for (size_t i = 0; i < n; ++i) ASSERT_EQ(sorted[i], i) << "order is not a permutation";
+// Walks the flattened tree and checks its invariants.
+class InvariantChecker {
+public:
+    InvariantChecker(const Bvh& bvh, const std::vector<Triangle>& tris) : bvh_(bvh), tris_(tris) {}
 
-    struct Item {
-        int index, depth;
-    };
-    std::vector<Item> stack{{0, 0}};
-    int next_first = 0, leaves = 0, max_depth = 0;
-    size_t visited = 0;
-    auto inside = [](const BvhNode& child, const BvhNode& parent) {
-        for (int k = 0; k < 3; ++k)
-            if (child.lo[k] < parent.lo[k] || child.hi[k] > parent.hi[k]) return false;
-        return true;
-    };
-    while (!stack.empty()) {
-        Item item = stack.back();
-        stack.pop_back();
-        ASSERT_GE(item.index, 0);
-        ASSERT_LT(size_t(item.index), bvh.nodes.size());
-        ++visited;
-        const BvhNode& node = bvh.nodes[item.index];
-        uint32_t count = node.meta & BVH_META_COUNT_MASK;
-        max_depth = std::max(max_depth, item.depth);
-        if (count > 0 || n == 0) {
-            ++leaves;
-            ASSERT_EQ(node.offset, next_first) << "leaves out of depth-first order";
-            next_first += int(count);
-            for (uint32_t i = 0; i < count; ++i) {
-                for (int v = 0; v < 3; ++v) {
-                    V3 p = vertex(tris_bvh_order[node.offset + i], v);
-                    for (int k = 0; k < 3; ++k) {
-                        ASSERT_GE(get(p, k), node.lo[k]);
-                        ASSERT_LE(get(p, k), node.hi[k]);
+    void run() {
+        const size_t n = tris_.size();
+        ASSERT_EQ(bvh_.order.size(), n);
+        std::vector<uint32_t> sorted = bvh_.order;
+        std::sort(sorted.begin(), sorted.end());
+        for (size_t i = 0; i < n; ++i) ASSERT_EQ(sorted[i], i) << "order is not a permutation";
+        ASSERT_FALSE(bvh_.nodes.empty());
+        int stack = visit(0, 0);
+        EXPECT_EQ(size_t(next_first_), n) << "leaves do not cover every triangle exactly once";
+        EXPECT_EQ(size_t(next_node_), bvh_.nodes.size()) << "unreachable nodes";
+        EXPECT_EQ(leaves_, bvh_.leaf_count);
+        EXPECT_EQ(max_depth_, bvh_.max_depth);
+        EXPECT_EQ(stack, bvh_.max_stack);
+        EXPECT_LE(stack, BVH_STACK_SIZE);
+    }
+
+private:
+    float lo(const BvhNode& node, int slot, int axis) const { return node.bounds[2 * axis][slot]; }
+    float hi(const BvhNode& node, int slot, int axis) const { return node.bounds[2 * axis + 1][slot]; }
+
+    // Checks the subtree of node `index` (reached at `depth`); returns the most stack entries a
+    // traversal starting there with an empty stack can hold (k pushed for k children, one of
+    // them popped and its subtree traversed above the other k - 1).
+    int visit(int index, int depth) {
+        EXPECT_EQ(index, next_node_) << "nodes out of depth-first order";
+        if (index != next_node_) return 0;
+        ++next_node_;
+        const BvhNode& node = bvh_.nodes[size_t(index)];
+        int k = 0, deepest = 0;
+        for (int slot = 0; slot < BVH_WIDTH; ++slot) {
+            int c = node.child[slot];
+            bool empty = lo(node, slot, 0) > hi(node, slot, 0);
+            if (empty) {
+                EXPECT_EQ(c, BVH_LEAF(0, 0)) << "empty slot with a child";
+                for (int a = 0; a < 3; ++a) EXPECT_TRUE(lo(node, slot, a) == INFINITY && hi(node, slot, a) == -INFINITY);
+                continue;
+            }
+            ++k;
+            if (c < 0) {
+                int first = BVH_LEAF_FIRST(c), count = BVH_LEAF_COUNT(c);
+                EXPECT_GT(count, 0);
+                EXPECT_EQ(first, next_first_) << "leaves out of depth-first order";
+                next_first_ += count;
+                ++leaves_;
+                max_depth_ = std::max(max_depth_, depth + 1);
+                for (int i = first; i < first + count && size_t(i) < tris_.size(); ++i) {
+                    for (int v = 0; v < 3; ++v) {
+                        V3 p = vertex(tris_[size_t(i)], v);
+                        for (int a = 0; a < 3; ++a) {
+                            EXPECT_GE(get(p, a), lo(node, slot, a));
+                            EXPECT_LE(get(p, a), hi(node, slot, a));
+                        }
                     }
                 }
+            } else {
+                EXPECT_GT(c, index);
+                if (c <= index || size_t(c) >= bvh_.nodes.size()) return 0;
+                const BvhNode& child = bvh_.nodes[size_t(c)];
+                for (int s = 0; s < BVH_WIDTH; ++s) {
+                    if (lo(child, s, 0) > hi(child, s, 0)) continue;
+                    for (int a = 0; a < 3; ++a) {
+                        EXPECT_GE(lo(child, s, a), lo(node, slot, a)) << "child box outside its parent's";
+                        EXPECT_LE(hi(child, s, a), hi(node, slot, a)) << "child box outside its parent's";
+                    }
+                }
+                deepest = std::max(deepest, visit(c, depth + 1));
             }
-        } else {
-            uint32_t axis = node.meta >> BVH_META_AXIS_SHIFT;
-            ASSERT_LT(axis, 3u);
-            int first = item.index + 1, second = node.offset;
-            ASSERT_GT(second, first);
-            ASSERT_TRUE(inside(bvh.nodes[first], node));
-            ASSERT_TRUE(inside(bvh.nodes[second], node));
-            stack.push_back({second, item.depth + 1});
-            stack.push_back({first, item.depth + 1});
         }
+        return std::max(k, k - 1 + deepest);
     }
-    EXPECT_EQ(size_t(next_first), n) << "leaves do not cover every triangle exactly once";
-    EXPECT_EQ(visited, bvh.nodes.size()) << "unreachable nodes";
-    EXPECT_EQ(leaves, bvh.leaf_count);
-    EXPECT_EQ(max_depth, bvh.max_depth);
-    EXPECT_LT(max_depth, BVH_MAX_DEPTH);
+
+    const Bvh& bvh_;
+    const std::vector<Triangle>& tris_;
+    int next_node_ = 0, next_first_ = 0, leaves_ = 0, max_depth_ = 0;
+};
+
+void check_invariants(const Bvh& bvh, const std::vector<Triangle>& tris_bvh_order) {
+    InvariantChecker(bvh, tris_bvh_order).run();
 }
 
 // The device's closest hits agree with the brute-force loop: same t (up to rounding), and the
@@ -377,7 +403,7 @@ TEST(Bvh, DegenerateInputsStayShallow) {
     Bvh a = build_bvh(same);
     check_invariants(a, reorder(same, a.order));
     // Centroids spaced geometrically along x: SAH peels one triangle per level; the depth guard
-    // must keep the tree within BVH_MAX_DEPTH.
+    // must keep the traversal stack within BVH_STACK_SIZE.
     std::vector<Triangle> chain;
     for (int i = 0; i < 4000; ++i) {
         float x = std::ldexp(1.0f, -(i % 120));

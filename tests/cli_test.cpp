@@ -11,6 +11,8 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "film/image_io.h"
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -20,9 +22,9 @@ struct CommandResult {
     std::string output;  // stdout and stderr together
 };
 
-CommandResult run(const std::string& args) {
+CommandResult run(const std::string& args, const std::string& env = "") {
     CommandResult r;
-    std::string cmd = std::string(CLBDPT_BINARY) + " " + args + " 2>&1";
+    std::string cmd = env + std::string(CLBDPT_BINARY) + " " + args + " 2>&1";
     FILE* pipe = popen(cmd.c_str(), "r");
     if (!pipe) return r;
     std::array<char, 4096> buf;
@@ -110,6 +112,26 @@ TEST_F(CliTest, AovRendersTheFirstHit) {
     CommandResult r = run("render " + data("materials.obj") + " --aov normal --width 16 --height 16 -o " + out("n.exr"));
     ASSERT_EQ(r.status, 0) << r.output;
     EXPECT_TRUE(fs::exists(out("n.exr")));
+}
+
+// Two PoCL devices share one render: the passes split between them, the image is the same as
+// one device's (each pass is the same computation; the sums are merged in double precision, so
+// only the last bits of a double could differ, far below what a float image keeps).
+TEST_F(CliTest, TwoDevicesShareOneRender) {
+    const std::string scene = " " + std::string(CLBDPT_SCENES_DIR) + "/cornell-box/cornell-box.json --spp 6 --width 24 --height 24";
+    CommandResult one = run("render" + scene + " -o " + out("one.exr"));
+    ASSERT_EQ(one.status, 0) << one.output;
+    CommandResult two = run("render" + scene + " --device all -o " + out("two.exr") + " --stats " + out("two.json"),
+                            "POCL_DEVICES='pthread pthread' POCL_MAX_PTHREAD_COUNT=1 ");
+    ASSERT_EQ(two.status, 0) << two.output;
+    std::ifstream in(out("two.json"));
+    nlohmann::json j = nlohmann::json::parse(in);
+    EXPECT_EQ(j["devices"], 2);
+    int w = 0, h = 0, w2 = 0, h2 = 0;
+    std::vector<float> a = clbdpt::read_image_rgb(out("one.exr"), &w, &h);
+    std::vector<float> b = clbdpt::read_image_rgb(out("two.exr"), &w2, &h2);
+    ASSERT_EQ(a.size(), b.size());
+    for (size_t i = 0; i < a.size(); ++i) EXPECT_NEAR(a[i], b[i], 1e-6f * (1.0f + a[i])) << i;
 }
 
 TEST_F(CliTest, DevicesListsAtLeastOne) {

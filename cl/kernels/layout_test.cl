@@ -6,7 +6,7 @@
 
 /* S(T): the struct's size and alignment; F(T, f): the offset of field f. */
 #define CLBDPT_LAYOUT_LIST(S, F)                                                                  \
-    S(BvhNode) F(BvhNode, lo) F(BvhNode, offset) F(BvhNode, hi) F(BvhNode, meta)                  \
+    S(BvhNode) F(BvhNode, bounds) F(BvhNode, child) F(BvhNode, pad)                                \
     S(Triangle) F(Triangle, p0) F(Triangle, p1) F(Triangle, p2)                                   \
     S(TriangleInfo) F(TriangleInfo, material) F(TriangleInfo, light) F(TriangleInfo, normals)     \
         F(TriangleInfo, source_index)                                                             \

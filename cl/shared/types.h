@@ -11,21 +11,29 @@
 
 /* ---- Geometry ------------------------------------------------------------------------- */
 
-/* One node of the flattened (depth-first) BVH. An interior node's first child is the next
- * node in the array and its second child is at `offset`; a leaf holds `count` triangles from
- * `offset` on, in the reordered triangle arrays. */
+/* One node of the BVH_WIDTH-wide BVH, flattened depth-first: a node's interior children follow
+ * it in child order, each with its whole subtree. The children's boxes are stored by plane, all
+ * children at a time, so the traversal tests them with one vector operation per plane:
+ * bounds[2k][i] and bounds[2k + 1][i] are the lower and upper planes on axis k (x, y, z) of
+ * child i. An unused child slot has an empty box (lower +inf, upper -inf) that no ray enters.
+ * child[i] >= 0: the node index of an interior child; child[i] < 0: a leaf of
+ * BVH_LEAF_COUNT(child[i]) triangles from BVH_LEAF_FIRST(child[i]) on, in the reordered
+ * triangle arrays. The root is node 0. */
+#define BVH_WIDTH 8 /* 4 works too (host and device both follow this header) */
 typedef struct {
-    float lo[3];
-    clbdpt_int offset;
-    float hi[3];
-    clbdpt_uint meta; /* bits 0..15: triangle count (0 = interior); bits 16..17: split axis */
+    float bounds[6][BVH_WIDTH];
+    clbdpt_int child[BVH_WIDTH];
+    clbdpt_int pad[BVH_WIDTH]; /* to a power of two bytes: whole cache lines per node */
 } BvhNode;
 
-#define BVH_META_COUNT_MASK 0xffffu
-#define BVH_META_AXIS_SHIFT 16
+#define BVH_LEAF_BITS 4 /* bits of a leaf's triangle count in its child entry */
+#define BVH_LEAF(first, count) (~(((first) << BVH_LEAF_BITS) | (count)))
+#define BVH_LEAF_FIRST(c) ((~(c)) >> BVH_LEAF_BITS)
+#define BVH_LEAF_COUNT(c) ((~(c)) & ((1 << BVH_LEAF_BITS) - 1))
 
-/* Size of the traversal stack (cl/bvh.h); the builder keeps every leaf shallower than this. */
-#define BVH_MAX_DEPTH 64
+/* Entries of the traversal stack (cl/bvh.h); the builder guarantees that no traversal of its
+ * tree needs more. */
+#define BVH_STACK_SIZE 64
 
 /* Triangle corners in BVH order; w is unused (kept 0). */
 typedef struct {

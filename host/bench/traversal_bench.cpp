@@ -2,18 +2,23 @@
 // with Embree 3 (single-ray API, 2 threads) as the yardstick when it is available.
 //
 // Scenes (deterministic): the open Cornell box with its two blocks (32 triangles), and the open
-// box with two tessellated spheres of about --triangles triangles in all (the scene of
-// /work/shared/REFERENCE.md's Embree table). Ray kinds, each traced --repeats times (median):
+// box with two tessellated spheres of about --triangles triangles in all (the scene of the
+// project's Embree reference figures). Ray kinds:
 //   primary     closest hit, pinhole camera grid (coherent)
 //   bounce      closest hit, cosine-distributed from the primary hits
 //   random      closest hit, random origins in the scene bounds, random directions
 //   light       any hit, shadow rays from primary hits to random points on the light
 //   connection  any hit, between random surface points (area-weighted)
 //   random-any  any hit, the random rays
+// Each kind is traced once to warm up, then --repeats times by each tracer in turn; the table
+// gives rays over the median wall time, and rays over the median CPU time of the process (the
+// steadier figure when other processes share the cores), and the share of rays on which the
+// two tracers agree (hit or miss, and t within 1e-3 relative).
 //
 // Usage: traversal_bench [--triangles N] [--rays N] [--repeats K] [--local L] [--device S]
-//                        [--scene cornell|spheres|all] [--no-embree]
-// --local: work-group size (0 = let the driver choose).
+//                        [--scene cornell|spheres|all] [--only KIND] [--huge-pages] [--no-embree]
+// --local: work-group size (0 = the driver's choice). --huge-pages: BVH and triangles in host
+// memory on transparent huge pages (CL_MEM_USE_HOST_PTR) instead of a driver copy.
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -25,6 +30,7 @@
 #include <string>
 #include <thread>
 #include <vector>
+#include <sys/mman.h>
 
 #include "bvh/bvh.h"
 #include "device/opencl.h"
@@ -48,6 +54,8 @@ struct Options {
     int local = 0;
     std::string device;
     std::string scene = "all";
+    std::string only;  // one ray kind, for profiling
+    bool huge_pages = false;
     bool embree = true;
 };
 
@@ -238,7 +246,28 @@ private:
 struct TraceResult {
     std::vector<cl_float4> hits;  // closest: (t, b1, b2, triangle bits)
     std::vector<int> occluded;    // any hit
-    double median_seconds = 0;
+};
+
+// Wall time and the CPU time of the whole process (PoCL's and Embree's threads included) of one
+// run. Under load from other processes, rays per CPU-second times the core count is the steadier
+// figure for comparing two tracers.
+struct Timing {
+    double wall = 0, cpu = 0;
+};
+
+double process_cpu_seconds() {
+    timespec ts;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+    return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
+}
+
+class Stopwatch {
+public:
+    Timing stop() const { return {seconds_since(wall_), process_cpu_seconds() - cpu_}; }
+
+private:
+    Clock::time_point wall_ = Clock::now();
+    double cpu_ = process_cpu_seconds();
 };
 
 double median(std::vector<double> v) {
@@ -249,56 +278,83 @@ double median(std::vector<double> v) {
 
 class ClTracer {
 public:
-    ClTracer(DeviceContext& ctx, const Bvh& bvh, const std::vector<Triangle>& tris, int local)
+    ClTracer(DeviceContext& ctx, const Bvh& bvh, const std::vector<Triangle>& tris, int local, bool huge_pages)
         : ctx_(ctx), local_(local) {
-        nodes_ = cl::Buffer(ctx.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, bvh.nodes.size() * sizeof(BvhNode),
-                            const_cast<BvhNode*>(bvh.nodes.data()));
-        tris_ = cl::Buffer(ctx.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, tris.size() * sizeof(Triangle),
-                           const_cast<Triangle*>(tris.data()));
+        nodes_ = upload(bvh.nodes.data(), bvh.nodes.size() * sizeof(BvhNode), huge_pages, &nodes_memory_);
+        tris_ = upload(tris.data(), tris.size() * sizeof(Triangle), huge_pages, &tris_memory_);
         const cl::Program& program = ctx.program("kernels/trace.cl", {}).program;
         closest_ = cl::Kernel(program, "trace_closest");
         any_ = cl::Kernel(program, "trace_any");
     }
 
-    TraceResult trace(const RaySet& rays, int repeats) {
+    // Uploads a ray set; run() then traces it.
+    void load(const RaySet& rays) {
+        rays_ = &rays;
         size_t n = rays.o.size();
         cl::Context& c = ctx_.context();
-        cl::Buffer ob(c, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, n * sizeof(cl_float4), const_cast<cl_float4*>(rays.o.data()));
-        cl::Buffer db(c, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, n * sizeof(cl_float4), const_cast<cl_float4*>(rays.d.data()));
-        size_t out_size = rays.any_hit ? sizeof(int) : sizeof(cl_float4);
-        cl::Buffer out(c, CL_MEM_WRITE_ONLY, n * out_size);
+        ob_ = cl::Buffer(c, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, n * sizeof(cl_float4), const_cast<cl_float4*>(rays.o.data()));
+        db_ = cl::Buffer(c, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, n * sizeof(cl_float4), const_cast<cl_float4*>(rays.d.data()));
+        out_ = cl::Buffer(c, CL_MEM_WRITE_ONLY, n * (rays.any_hit ? sizeof(int) : sizeof(cl_float4)));
         cl::Kernel& k = rays.any_hit ? any_ : closest_;
         k.setArg(0, nodes_);
         k.setArg(1, tris_);
-        k.setArg(2, ob);
-        k.setArg(3, db);
-        k.setArg(4, out);
+        k.setArg(2, ob_);
+        k.setArg(3, db_);
+        k.setArg(4, out_);
         k.setArg(5, cl_int(n));
+    }
+
+
+    Timing run() {
+        size_t n = rays_->o.size();
         size_t global = local_ > 0 ? (n + local_ - 1) / local_ * local_ : n;
         cl::NDRange local = local_ > 0 ? cl::NDRange(size_t(local_)) : cl::NullRange;
-        std::vector<double> times;
-        for (int r = 0; r < repeats + 1; ++r) {  // the first run warms up and is not counted
-            auto t0 = Clock::now();
-            ctx_.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(global), local);
-            ctx_.queue().finish();
-            if (r > 0) times.push_back(seconds_since(t0));
-        }
+        Stopwatch watch;
+        ctx_.queue().enqueueNDRangeKernel(rays_->any_hit ? any_ : closest_, cl::NullRange, cl::NDRange(global), local);
+        ctx_.queue().finish();
+        return watch.stop();
+    }
+
+    TraceResult read() {
+        size_t n = rays_->o.size();
         TraceResult result;
-        result.median_seconds = median(times);
-        if (rays.any_hit) {
+        if (rays_->any_hit) {
             result.occluded.resize(n);
-            ctx_.queue().enqueueReadBuffer(out, CL_TRUE, 0, n * out_size, result.occluded.data());
+            ctx_.queue().enqueueReadBuffer(out_, CL_TRUE, 0, n * sizeof(int), result.occluded.data());
         } else {
             result.hits.resize(n);
-            ctx_.queue().enqueueReadBuffer(out, CL_TRUE, 0, n * out_size, result.hits.data());
+            ctx_.queue().enqueueReadBuffer(out_, CL_TRUE, 0, n * sizeof(cl_float4), result.hits.data());
         }
         return result;
     }
 
 private:
+    struct Free {
+        void operator()(void* p) const { std::free(p); }
+    };
+    using HostMemory = std::unique_ptr<void, Free>;
+
+    // A read-only device copy of the bytes. With huge_pages, the buffer uses host memory on 2 MiB
+    // pages (CL_MEM_USE_HOST_PTR, which PoCL's CPU device uses in place): fewer TLB misses on
+    // the random accesses of incoherent rays. Memory must outlive the buffer.
+    cl::Buffer upload(const void* data, size_t bytes, bool huge_pages, HostMemory* memory) {
+        if (!huge_pages)
+            return cl::Buffer(ctx_.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, bytes, const_cast<void*>(data));
+        const size_t page = size_t(2) << 20;
+        size_t size = (bytes + page - 1) / page * page;
+        void* p = nullptr;
+        if (posix_memalign(&p, page, size) != 0) throw Error("out of memory");
+        memory->reset(p);
+        madvise(p, size, MADV_HUGEPAGE);  // a hint: without transparent huge pages, normal pages
+        std::memcpy(p, data, bytes);
+        return cl::Buffer(ctx_.context(), CL_MEM_READ_ONLY | CL_MEM_USE_HOST_PTR, bytes, p);
+    }
+
     DeviceContext& ctx_;
     int local_;
-    cl::Buffer nodes_, tris_;
+    HostMemory nodes_memory_, tris_memory_;
+    const RaySet* rays_ = nullptr;
+    cl::Buffer nodes_, tris_, ob_, db_, out_;
     cl::Kernel closest_, any_;
 };
 
@@ -342,66 +398,71 @@ public:
         rtcReleaseDevice(device_);
     }
 
-    TraceResult trace(const RaySet& rays, int repeats) {
+    void load(const RaySet& rays) {
+        rays_ = &rays;
+        result_ = TraceResult();
+        if (rays.any_hit) result_.occluded.resize(rays.o.size());
+        else result_.hits.resize(rays.o.size());
+    }
+
+    Timing run() {
+        const RaySet& rays = *rays_;
+        TraceResult& result = result_;
         size_t n = rays.o.size();
-        TraceResult result;
-        if (rays.any_hit) result.occluded.resize(n);
-        else result.hits.resize(n);
-        std::vector<double> times;
-        for (int r = 0; r < repeats + 1; ++r) {
-            std::atomic<size_t> next{0};
-            auto worker = [&] {
-                RTCIntersectContext context;
-                rtcInitIntersectContext(&context);
-                const size_t chunk = 1024;
-                for (;;) {
-                    size_t begin = next.fetch_add(chunk);
-                    if (begin >= n) break;
-                    size_t end = std::min(n, begin + chunk);
-                    for (size_t i = begin; i < end; ++i) {
-                        RTCRayHit rh;
-                        rh.ray.org_x = rays.o[i].s[0];
-                        rh.ray.org_y = rays.o[i].s[1];
-                        rh.ray.org_z = rays.o[i].s[2];
-                        rh.ray.tnear = 0.0f;
-                        rh.ray.dir_x = rays.d[i].s[0];
-                        rh.ray.dir_y = rays.d[i].s[1];
-                        rh.ray.dir_z = rays.d[i].s[2];
-                        rh.ray.time = 0.0f;
-                        rh.ray.tfar = rays.o[i].s[3];
-                        rh.ray.mask = ~0u;
-                        rh.ray.id = 0;
-                        rh.ray.flags = 0;
-                        if (rays.any_hit) {
-                            rtcOccluded1(scene_, &context, &rh.ray);
-                            result.occluded[i] = rh.ray.tfar < 0 ? 1 : 0;
-                        } else {
-                            rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-                            rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-                            rtcIntersect1(scene_, &context, &rh);
-                            bool hit = rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
-                            int prim = hit ? int(rh.hit.primID) : -1;
-                            float bits;
-                            std::memcpy(&bits, &prim, 4);
-                            result.hits[i] = {{hit ? rh.ray.tfar : rays.o[i].s[3], rh.hit.u, rh.hit.v, bits}};
-                        }
+        std::atomic<size_t> next{0};
+        auto worker = [&] {
+            RTCIntersectContext context;
+            rtcInitIntersectContext(&context);
+            const size_t chunk = 1024;
+            for (;;) {
+                size_t begin = next.fetch_add(chunk);
+                if (begin >= n) break;
+                size_t end = std::min(n, begin + chunk);
+                for (size_t i = begin; i < end; ++i) {
+                    RTCRayHit rh;
+                    rh.ray.org_x = rays.o[i].s[0];
+                    rh.ray.org_y = rays.o[i].s[1];
+                    rh.ray.org_z = rays.o[i].s[2];
+                    rh.ray.tnear = 0.0f;
+                    rh.ray.dir_x = rays.d[i].s[0];
+                    rh.ray.dir_y = rays.d[i].s[1];
+                    rh.ray.dir_z = rays.d[i].s[2];
+                    rh.ray.time = 0.0f;
+                    rh.ray.tfar = rays.o[i].s[3];
+                    rh.ray.mask = ~0u;
+                    rh.ray.id = 0;
+                    rh.ray.flags = 0;
+                    if (rays.any_hit) {
+                        rtcOccluded1(scene_, &context, &rh.ray);
+                        result.occluded[i] = rh.ray.tfar < 0 ? 1 : 0;
+                    } else {
+                        rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+                        rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+                        rtcIntersect1(scene_, &context, &rh);
+                        bool hit = rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
+                        int prim = hit ? int(rh.hit.primID) : -1;
+                        float bits;
+                        std::memcpy(&bits, &prim, 4);
+                        result.hits[i] = {{hit ? rh.ray.tfar : rays.o[i].s[3], rh.hit.u, rh.hit.v, bits}};
                     }
                 }
-            };
-            auto t0 = Clock::now();
-            std::vector<std::thread> pool;
-            for (int t = 0; t < threads_; ++t) pool.emplace_back(worker);
-            for (auto& th : pool) th.join();
-            if (r > 0) times.push_back(seconds_since(t0));
-        }
-        result.median_seconds = median(times);
-        return result;
+            }
+        };
+        Stopwatch watch;
+        std::vector<std::thread> pool;
+        for (int t = 0; t < threads_; ++t) pool.emplace_back(worker);
+        for (auto& th : pool) th.join();
+        return watch.stop();
     }
+
+    TraceResult read() { return result_; }
 
     double build_seconds = 0;
 
 private:
     int threads_;
+    const RaySet* rays_ = nullptr;
+    TraceResult result_;
     RTCDevice device_ = nullptr;
     RTCScene scene_ = nullptr;
 };
@@ -414,13 +475,10 @@ double agreement(const RaySet& rays, const TraceResult& a, const TraceResult& b)
     for (size_t i = 0; i < n; ++i) {
         if (rays.any_hit) {
             same += a.occluded[i] == b.occluded[i];
-            if (a.occluded[i] != b.occluded[i] && getenv("DBG") && same + 20 > i) std::printf("ray %zu o=(%g %g %g) d=(%g %g %g) tmax %g ours %d embree %d\n", i, rays.o[i].s[0], rays.o[i].s[1], rays.o[i].s[2], rays.d[i].s[0], rays.d[i].s[1], rays.d[i].s[2], rays.o[i].s[3], a.occluded[i], b.occluded[i]);
         } else {
             bool ha = hit_triangle(a.hits[i]) >= 0, hb = hit_triangle(b.hits[i]) >= 0;
             float ta = a.hits[i].s[0], tb = b.hits[i].s[0];
-            bool ok = ha == hb && (!ha || std::fabs(ta - tb) <= 1e-3f * std::max(ta, tb));
-            same += ok;
-            if (!ok && getenv("DBG") && same + 20 > i) std::printf("ray %zu o=(%g %g %g) d=(%g %g %g) ours t=%g tri=%d  embree t=%g tri=%d\n", i, rays.o[i].s[0], rays.o[i].s[1], rays.o[i].s[2], rays.d[i].s[0], rays.d[i].s[1], rays.d[i].s[2], ta, hit_triangle(a.hits[i]), tb, hit_triangle(b.hits[i]));
+            same += ha == hb && (!ha || std::fabs(ta - tb) <= 1e-3f * std::max(ta, tb));
         }
     }
     return double(same) / double(n);
@@ -436,7 +494,7 @@ void run_scene(const Scene& scene, const Options& opt, DeviceContext& ctx) {
     std::printf("  clbdpt BVH: build %.3f s, %zu nodes, %d leaves, depth %d, %.1f bytes/triangle\n",
                 bvh.build_seconds, bvh.nodes.size(), bvh.leaf_count, bvh.max_depth, bytes / double(n));
 
-    ClTracer cl_tracer(ctx, bvh, tris, opt.local);
+    ClTracer cl_tracer(ctx, bvh, tris, opt.local, opt.huge_pages);
 #ifdef CLBDPT_HAVE_EMBREE
     std::unique_ptr<EmbreeTracer> embree;
     if (opt.embree) {
@@ -449,7 +507,9 @@ void run_scene(const Scene& scene, const Options& opt, DeviceContext& ctx) {
     std::mt19937 rng(1234);
     std::vector<RaySet> sets;
     sets.push_back(primary_rays(scene, opt.rays));
-    TraceResult primary = cl_tracer.trace(sets[0], 0);
+    cl_tracer.load(sets[0]);
+    cl_tracer.run();
+    TraceResult primary = cl_tracer.read();
     std::vector<SurfacePoint> hits;
     for (size_t i = 0; i < primary.hits.size(); ++i) {
         int t = hit_triangle(primary.hits[i]);
@@ -503,22 +563,46 @@ void run_scene(const Scene& scene, const Options& opt, DeviceContext& ctx) {
     random.any_hit = true;
     sets.push_back(std::move(random));
 
-    std::printf("  %-11s %-7s %9s %13s", "rays", "query", "count", "clbdpt Mray/s");
+    // Mray/s: rays over the median wall time. Per CPU-second: rays over the median CPU time of
+    // the process, the steadier figure when other processes share the cores.
+    std::printf("  %-11s %-7s %8s %8s %8s", "rays", "query", "count", "clbdpt", "per-cpu");
 #ifdef CLBDPT_HAVE_EMBREE
-    if (embree) std::printf(" %13s %7s %7s", "embree Mray/s", "ratio", "agree");
+    if (embree) std::printf(" %8s %8s %7s %7s %8s", "embree", "per-cpu", "ratio", "cpu", "agree");
 #endif
     std::printf("\n");
     for (const RaySet& set : sets) {
-        TraceResult ours = cl_tracer.trace(set, opt.repeats);
-        double ours_mrays = double(set.o.size()) / ours.median_seconds * 1e-6;
-        std::printf("  %-11s %-7s %9zu %13.2f", set.kind.c_str(), set.any_hit ? "any" : "closest", set.o.size(),
-                    ours_mrays);
+        if (!opt.only.empty() && set.kind != opt.only) continue;
+        const double n = double(set.o.size());
+        std::vector<double> ours_wall, ours_cpu, theirs_wall, theirs_cpu;
+        cl_tracer.load(set);
+        cl_tracer.run();  // warm-up, not counted
 #ifdef CLBDPT_HAVE_EMBREE
         if (embree) {
-            TraceResult theirs = embree->trace(set, opt.repeats);
-            double theirs_mrays = double(set.o.size()) / theirs.median_seconds * 1e-6;
-            std::printf(" %13.2f %7.2f %6.2f%%", theirs_mrays, ours_mrays / theirs_mrays,
-                        100.0 * agreement(set, ours, theirs));
+            embree->load(set);
+            embree->run();
+        }
+#endif
+        // Alternate the two tracers so load from elsewhere hits both alike.
+        for (int r = 0; r < opt.repeats; ++r) {
+            Timing t = cl_tracer.run();
+            ours_wall.push_back(t.wall);
+            ours_cpu.push_back(t.cpu);
+#ifdef CLBDPT_HAVE_EMBREE
+            if (embree) {
+                t = embree->run();
+                theirs_wall.push_back(t.wall);
+                theirs_cpu.push_back(t.cpu);
+            }
+#endif
+        }
+        double ours_mrays = n / median(ours_wall) * 1e-6, ours_cpu_mrays = n / median(ours_cpu) * 1e-6;
+        std::printf("  %-11s %-7s %8zu %8.2f %8.2f", set.kind.c_str(), set.any_hit ? "any" : "closest", set.o.size(),
+                    ours_mrays, ours_cpu_mrays);
+#ifdef CLBDPT_HAVE_EMBREE
+        if (embree) {
+            double theirs_mrays = n / median(theirs_wall) * 1e-6, theirs_cpu_mrays = n / median(theirs_cpu) * 1e-6;
+            std::printf(" %8.2f %8.2f %7.2f %7.2f %7.2f%%", theirs_mrays, theirs_cpu_mrays, ours_mrays / theirs_mrays,
+                        ours_cpu_mrays / theirs_cpu_mrays, 100.0 * agreement(set, cl_tracer.read(), embree->read()));
         }
 #endif
         std::printf("\n");
@@ -545,11 +629,13 @@ int run(int argc, char** argv) {
         else if (a == "--local") opt.local = int(parse_long("--local", next)), ++i;
         else if (a == "--device" && next) opt.device = next, ++i;
         else if (a == "--scene" && next) opt.scene = next, ++i;
+        else if (a == "--only" && next) opt.only = next, ++i;
+        else if (a == "--huge-pages") opt.huge_pages = true;
         else if (a == "--no-embree") opt.embree = false;
         else {
             std::fprintf(stderr,
                          "usage: traversal_bench [--triangles N] [--rays N] [--repeats K] [--local L] "
-                         "[--device S] [--scene cornell|spheres|all] [--no-embree]\n");
+                         "[--device S] [--scene cornell|spheres|all] [--only KIND] [--huge-pages] [--no-embree]\n");
             return a == "--help" || a == "-h" ? 0 : 2;
         }
     }
@@ -562,7 +648,8 @@ int run(int argc, char** argv) {
     std::printf("device: %s (%s), kernel build %.2f s%s, work-group size %s\n", entry.name.c_str(),
                 entry.platform_name.c_str(), seconds_since(t0), build.from_cache ? " (cache)" : "",
                 opt.local > 0 ? std::to_string(opt.local).c_str() : "driver's choice");
-    std::printf("rays per kind: %ld, repeats: %d (median reported)\n", opt.rays, opt.repeats);
+    std::printf("rays per kind: %ld, repeats: %d (median reported), BVH width %d%s\n", opt.rays, opt.repeats, BVH_WIDTH,
+                opt.huge_pages ? ", huge pages" : "");
 
     if (opt.scene == "cornell" || opt.scene == "all") run_scene(cornell_scene(), opt, ctx);
     if (opt.scene == "spheres" || opt.scene == "all") run_scene(spheres_scene(opt.triangles), opt, ctx);

@@ -1,86 +1,145 @@
-// Binned-SAH BVH build (Wald 2007, "On fast Construction of SAH-based Bounding Volume
-// Hierarchies"; pbrt-v3 BVHAccel::recursiveBuild with SplitMethod::SAH), flattened depth-first
-// into BvhNode.
+// BVH build: a binary tree by binned SAH (Wald 2007, "On fast Construction of SAH-based Bounding
+// Volume Hierarchies"; pbrt-v3 BVHAccel::recursiveBuild, SplitMethod::SAH), collapsed to 4-wide
+// nodes (as Embree's BVH4) and flattened depth-first into BvhNode (cl/shared/types.h).
 //
 // The build works on PrimRefs (a triangle's bounds and its index), partitioned in place, so a
 // node's triangles are always a contiguous range [first, first + count) of the ref array and the
-// final triangle order is just the ref order. Binary nodes go to a shared array with an atomic
-// allocator, so subtrees can be built on several threads; the flattening pass then lays them out
-// depth-first (first child right after its parent).
+// final triangle order is just the ref order. Binary nodes go to one array through an atomic
+// allocator, so subtrees can be built on several threads.
+//
+// Besides the centroid on each axis, the binning also sorts triangles by size (log2 of their
+// box's area), so SAH can split large triangles off from small ones with the same centroid.
+// Without it a few big triangles (walls, floors) whose boxes span the scene end up in nodes full
+// of small ones, and every ray pays for the huge boxes of those nodes.
 #include "bvh/bvh.h"
 
 #include <algorithm>
 #include <atomic>
-#include <cassert>
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <memory>
 #include <thread>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include "util/error.h"
 
 namespace clbdpt {
 namespace {
 
-// ---- SAH constants ------------------------------------------------------------------------
-// Cost of one ray-box traversal step relative to one ray-triangle test. The watertight test
-// (cl/bvh.h) costs about as much as a slab test plus the stack work of a node visit, so the
-// two are taken equal (pbrt-v3 uses 1/8 for a cheaper triangle relative to its traversal;
-// measured here with traversal_bench: 1:1 gave the fastest traversal on PoCL).
+// ---- Build constants -------------------------------------------------------------------------
+
+// SAH costs: a ray visiting an interior node (one step of the traversal: 4 slab tests, the
+// stack work and, mostly, the cache miss of fetching the node) against testing one triangle.
+// With the ratio 1 the traversal was as fast as with 2 or 4, and with leaves of up to 8
+// (traversal_bench, PoCL on 2 cores): the ray rates are bound by memory latency, not by this.
 constexpr float kTraversalCost = 1.0f;
 constexpr float kIntersectionCost = 1.0f;
 
-// Number of bins per axis for the SAH sweep. 32 bins are within a percent or two of a full
-// sweep in tree quality (Wald 2007) at a fraction of the cost.
-constexpr int kBinCount = 32;
+// Bins per binning key for the SAH sweep. 32 are within a percent or two of a full sweep in
+// tree quality (Wald 2007); small nodes use fewer (one per triangle), where setting up and
+// sweeping 32 bins would cost more than the binning itself.
+constexpr int kMaxBins = 32;
+constexpr int kMinBins = 4;
 
-// Largest leaf. SAH decides below it (a leaf of up to this many triangles is made when it is
-// cheaper than the best split); above it the node is always split.
+// Largest leaf. SAH decides below it (a leaf is made when it is cheaper than the best split);
+// above it the node is always split.
 constexpr int kMaxLeafSize = 4;
+static_assert(kMaxLeafSize < (1 << BVH_LEAF_BITS), "leaf count does not fit a BvhNode child entry");
 
-// Subtrees with fewer triangles than this are built on the calling thread; larger ones split
-// their second child off to a new thread while the spawn depth allows it.
+// Subtrees with fewer triangles than this are built on the calling thread; larger ones hand
+// their second child to a new thread while the spawn depth allows it. Nodes with more than
+// kParallelBinning triangles near the root bin on several threads.
 constexpr int kParallelThreshold = 16 * 1024;
+constexpr int kParallelBinning = 128 * 1024;
 
-// A leaf's triangle count must fit its bits in BvhNode::meta.
-static_assert(kMaxLeafSize <= int(BVH_META_COUNT_MASK), "leaf count does not fit BvhNode::meta");
+// Number of binning keys: centroid x, y, z (as twice the box centre) and size.
+constexpr int kKeys = 4;
 
-struct Box {
-    float lo[3] = {INFINITY, INFINITY, INFINITY};
-    float hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+// ---- Four-lane vectors -----------------------------------------------------------------------
 
-    void extend(const float* plo, const float* phi) {
-        for (int k = 0; k < 3; ++k) {
-            lo[k] = std::min(lo[k], plo[k]);
-            hi[k] = std::max(hi[k], phi[k]);
-        }
+#if defined(__SSE2__)
+struct V4 {
+    __m128 v;
+    static V4 load(const float* p) { return {_mm_load_ps(p)}; }
+    static V4 splat(float x) { return {_mm_set1_ps(x)}; }
+    void store(float* p) const { _mm_store_ps(p, v); }
+    friend V4 operator+(V4 a, V4 b) { return {_mm_add_ps(a.v, b.v)}; }
+    friend V4 operator-(V4 a, V4 b) { return {_mm_sub_ps(a.v, b.v)}; }
+    friend V4 operator*(V4 a, V4 b) { return {_mm_mul_ps(a.v, b.v)}; }
+    friend V4 vmin(V4 a, V4 b) { return {_mm_min_ps(a.v, b.v)}; }
+    friend V4 vmax(V4 a, V4 b) { return {_mm_max_ps(a.v, b.v)}; }
+    // Lanes 0..2 of a, lane 3 zero.
+    friend V4 xyz(V4 a) { return {_mm_and_ps(a.v, _mm_castsi128_ps(_mm_set_epi32(0, -1, -1, -1)))}; }
+};
+#else
+struct V4 {
+    float v[4];
+    static V4 load(const float* p) { return {{p[0], p[1], p[2], p[3]}}; }
+    static V4 splat(float x) { return {{x, x, x, x}}; }
+    void store(float* p) const { std::memcpy(p, v, sizeof v); }
+    template <typename F>
+    static V4 map(V4 a, V4 b, F f) { return {{f(a.v[0], b.v[0]), f(a.v[1], b.v[1]), f(a.v[2], b.v[2]), f(a.v[3], b.v[3])}}; }
+    friend V4 operator+(V4 a, V4 b) { return map(a, b, [](float x, float y) { return x + y; }); }
+    friend V4 operator-(V4 a, V4 b) { return map(a, b, [](float x, float y) { return x - y; }); }
+    friend V4 operator*(V4 a, V4 b) { return map(a, b, [](float x, float y) { return x * y; }); }
+    friend V4 vmin(V4 a, V4 b) { return map(a, b, [](float x, float y) { return x < y ? x : y; }); }
+    friend V4 vmax(V4 a, V4 b) { return map(a, b, [](float x, float y) { return x > y ? x : y; }); }
+    friend V4 xyz(V4 a) { return {{a.v[0], a.v[1], a.v[2], 0.0f}}; }
+};
+#endif
+
+// A box (lanes 0..2; lane 3 unused) or the bounds of the binning keys (all four lanes).
+struct Bounds4 {
+    V4 lo = V4::splat(INFINITY);
+    V4 hi = V4::splat(-INFINITY);
+
+    void extend(V4 a, V4 b) {
+        lo = vmin(lo, a);
+        hi = vmax(hi, b);
     }
-    void extend(const Box& b) { extend(b.lo, b.hi); }
-    void extend_point(const float* p) { extend(p, p); }
+    void extend(V4 p) { extend(p, p); }
+    void extend(const Bounds4& b) { extend(b.lo, b.hi); }
+    // Half the surface area of the box in lanes 0..2; 0 if empty.
     float half_area() const {
-        float dx = hi[0] - lo[0], dy = hi[1] - lo[1], dz = hi[2] - lo[2];
-        if (!(dx >= 0)) return 0;  // empty box
-        return dx * dy + dy * dz + dz * dx;
+        alignas(16) float d[4];
+        (hi - lo).store(d);
+        if (!(d[0] >= 0)) return 0;
+        return d[0] * d[1] + d[1] * d[2] + d[2] * d[0];
     }
 };
 
-// One triangle's bounds and its index in the input; 32 bytes so partitioning moves little.
-struct PrimRef {
+// One triangle's bounds, its size key and its index; 32 bytes, 16-aligned, so a ref is two
+// vector loads and partitioning moves little.
+struct alignas(16) PrimRef {
     float lo[3];
-    uint32_t index;
+    float size;  // log2 of the box's half area: the fourth binning key
     float hi[3];
-    float pad;
-    float centroid2(int axis) const { return lo[axis] + hi[axis]; }  // twice the box centre
+    uint32_t index;
+
+    V4 box_lo() const { return V4::load(lo); }  // lane 3: size, ignored as a box
+    V4 box_hi() const { return xyz(V4::load(hi)); }
+    // The binning keys: twice the box centre, and the size.
+    V4 keys() const { return V4::load(lo) + xyz(V4::load(hi)); }
+    float key(int k) const { return k < 3 ? lo[k] + hi[k] : size; }
 };
 
 // A binary node of the build. Interior: children at `left` and `left + 1` (allocated as a
-// pair). Leaf: `count` > 0 refs from `first`.
+// pair). Leaf: `count` > 0 refs from `first`. Trivial, so the array is not zeroed up front.
 struct BuildNode {
-    Box box;
-    int left = -1;
-    int first = 0;
-    int count = 0;
-    int axis = 0;
+    float lo[3], hi[3];
+    int left;
+    int first;
+    int count;
+    int height;  // longest path to a leaf below, in binary levels (a leaf: 0)
+
+    float half_area() const {
+        float dx = hi[0] - lo[0], dy = hi[1] - lo[1], dz = hi[2] - lo[2];
+        return dx >= 0 ? dx * dy + dy * dz + dz * dx : 0;
+    }
 };
 
 int ceil_log2(uint64_t n) {
@@ -89,198 +148,406 @@ int ceil_log2(uint64_t n) {
     return k;
 }
 
+// How keys map to bins: bin = (key - offset) * scale, per key.
+struct BinMapping {
+    int count = 0;  // bins per key
+    V4 offset = V4::splat(0), scale = V4::splat(0);
+
+    BinMapping() = default;
+    BinMapping(int bins, const Bounds4& keys) : count(bins), offset(keys.lo) {
+        alignas(16) float lo[4], hi[4], sc[4];
+        keys.lo.store(lo);
+        keys.hi.store(hi);
+        for (int k = 0; k < kKeys; ++k) {
+            float extent = hi[k] - lo[k];
+            // Slightly under bins / extent so the largest key lands in the last bin.
+            sc[k] = extent > 0 ? float(bins) * (1.0f - 1e-6f) / extent : 0.0f;
+        }
+        scale = V4::load(sc);
+    }
+    float scale_of(int k) const {
+        alignas(16) float s[4];
+        scale.store(s);
+        return s[k];
+    }
+    int bin_of(const PrimRef& r, int k) const {
+        alignas(16) float o[4], s[4];
+        offset.store(o);
+        scale.store(s);
+        int b = int((r.key(k) - o[k]) * s[k]);
+        return std::min(std::max(b, 0), count - 1);
+    }
+};
+
+// The bins of one node: for each key, the bounds and count of the refs in each bin.
+struct Bins {
+    BinMapping map;
+    Bounds4 box[kKeys][kMaxBins];
+    int n[kKeys][kMaxBins];
+
+    void init(const BinMapping& mapping) {
+        map = mapping;
+        for (int k = 0; k < kKeys; ++k) {
+            for (int b = 0; b < map.count; ++b) {
+                box[k][b] = Bounds4();
+                n[k][b] = 0;
+            }
+        }
+    }
+
+    void add(const PrimRef* refs, int begin, int end) {
+        for (int i = begin; i < end; ++i) {
+            const PrimRef& r = refs[i];
+            alignas(16) float f[4];
+            ((r.keys() - map.offset) * map.scale).store(f);
+            V4 lo = r.box_lo(), hi = r.box_hi();
+            for (int k = 0; k < kKeys; ++k) {
+                int b = std::min(std::max(int(f[k]), 0), map.count - 1);
+                box[k][b].extend(lo, hi);
+                n[k][b]++;
+            }
+        }
+    }
+
+    void merge(const Bins& other) {
+        for (int k = 0; k < kKeys; ++k) {
+            for (int b = 0; b < map.count; ++b) {
+                box[k][b].extend(other.box[k][b]);
+                n[k][b] += other.n[k][b];
+            }
+        }
+    }
+};
+
+struct Split {
+    float cost = INFINITY;  // sum over both sides of half area x triangle count
+    int key = -1;
+    int bin = -1;  // bins [0, bin) go left
+    BinMapping map;
+    Bounds4 left_box, right_box;
+};
+
+Split best_split(const Bins& bins) {
+    Split best;
+    best.map = bins.map;
+    const int count = bins.map.count;
+    for (int k = 0; k < kKeys; ++k) {
+        if (bins.map.scale_of(k) == 0) continue;  // all keys equal: nothing to split
+        // Right-to-left sweep: bounds and cost of the right side of every boundary.
+        Bounds4 right[kMaxBins];
+        float right_cost[kMaxBins];
+        Bounds4 acc;
+        int n = 0;
+        for (int b = count - 1; b > 0; --b) {
+            acc.extend(bins.box[k][b]);
+            n += bins.n[k][b];
+            right[b] = acc;
+            right_cost[b] = n ? acc.half_area() * float(n) : INFINITY;
+        }
+        acc = Bounds4();
+        n = 0;
+        for (int b = 0; b < count - 1; ++b) {
+            acc.extend(bins.box[k][b]);
+            n += bins.n[k][b];
+            if (n == 0) continue;
+            float cost = acc.half_area() * float(n) + right_cost[b + 1];
+            if (cost < best.cost) {
+                best.cost = cost;
+                best.key = k;
+                best.bin = b + 1;
+                best.left_box = acc;
+                best.right_box = right[b + 1];
+            }
+        }
+    }
+    return best;
+}
+
 class Builder {
 public:
-    Builder(std::vector<PrimRef>& refs, int max_threads)
-        : refs_(refs), nodes_(std::max<size_t>(1, 2 * refs.size() - 1)) {
-        spawn_depth_ = 0;
-        while ((1 << spawn_depth_) < max_threads) ++spawn_depth_;
+    Builder(std::vector<PrimRef>& refs, int threads)
+        : refs_(refs), nodes_(new BuildNode[std::max<size_t>(1, 2 * refs.size())]), threads_(threads) {
+        while ((1 << spawn_depth_) < threads) ++spawn_depth_;
         spawn_depth_ += 1;  // a few more tasks than cores, so uneven splits still balance
     }
 
-    // Builds the subtree of refs [first, first + count) into node `index`.
-    void build(int index, int first, int count, int depth) {
+    // Builds the subtree of refs [first, first + count), whose box and key bounds are given,
+    // into node `index`; returns its height.
+    int build(int index, int first, int count, int depth, const Bounds4& box, const Bounds4& keys) {
         BuildNode& node = nodes_[index];
-        Box box, centroids;
-        for (int i = first; i < first + count; ++i) {
-            const PrimRef& r = refs_[i];
-            box.extend(r.lo, r.hi);
-            float c[3] = {r.centroid2(0), r.centroid2(1), r.centroid2(2)};
-            centroids.extend_point(c);
-        }
-        node.box = box;
+        alignas(16) float lo[4], hi[4];
+        box.lo.store(lo);
+        box.hi.store(hi);
+        std::memcpy(node.lo, lo, sizeof node.lo);
+        std::memcpy(node.hi, hi, sizeof node.hi);
         node.first = first;
         node.count = count;
+        node.left = -1;
+        node.height = 0;
         if (count == 1) return make_leaf(depth);
 
         // Depth guarantee: a median split halves the count, so it finishes a subtree of n refs
-        // within ceil(log2 n) more levels. Once SAH could run past BVH_MAX_DEPTH, split at the
-        // median only. The traversal stack (cl/bvh.h) then never overflows.
-        bool median_only = depth + ceil_log2(uint64_t(count)) >= BVH_MAX_DEPTH - 1;
+        // within ceil(log2 n) more levels. Once SAH could take a leaf deeper than
+        // BVH_STACK_SIZE - 1, split at the median only; the collapse to wide nodes relies on it
+        // to bound the traversal stack.
+        bool median_only = depth + ceil_log2(uint64_t(count)) >= BVH_STACK_SIZE - 1;
 
-        int axis = 0, mid = -1;
-        float split_cost = INFINITY;
-        if (!median_only) find_sah_split(first, count, box, centroids, &axis, &mid, &split_cost);
-
+        int mid = -1;
+        Bounds4 left_box, right_box, left_keys, right_keys;
+        if (!median_only) {
+            Split split = find_split(first, count, depth, keys);
+            if (split.key >= 0) {
+                float area = box.half_area();
+                float split_cost = area > 0 ? kTraversalCost + kIntersectionCost * split.cost / area
+                                            : kTraversalCost + kIntersectionCost * float(count);
+                if (count <= kMaxLeafSize && kIntersectionCost * float(count) <= split_cost) return make_leaf(depth);
+                mid = partition(first, count, split, &left_keys, &right_keys);
+                left_box = split.left_box;
+                right_box = split.right_box;
+            }
+        }
         if (mid < 0) {
-            // No SAH split separates the centroids (all in one bin on every axis: equal or
-            // nearly equal centroids), or the depth limit: split by count at the median of the
-            // widest centroid axis, or make a leaf if the node is small enough.
+            // No split separates the keys (all triangles alike), or the depth limit: split by
+            // count at the median of the widest centroid axis, or make a leaf if small enough.
             if (count <= kMaxLeafSize) return make_leaf(depth);
-            axis = widest_axis(centroids);
-            mid = first + count / 2;
-            std::nth_element(refs_.begin() + first, refs_.begin() + mid, refs_.begin() + first + count,
-                             [axis](const PrimRef& a, const PrimRef& b) {
-                                 return a.centroid2(axis) < b.centroid2(axis);
-                             });
-        } else if (count <= kMaxLeafSize && kIntersectionCost * float(count) <= split_cost) {
-            return make_leaf(depth);
+            mid = median_split(first, count, keys, &left_box, &right_box, &left_keys, &right_keys);
         }
 
-        int left = alloc_pair();
+        int left = next_.fetch_add(2, std::memory_order_relaxed);
         node.left = left;
-        node.axis = axis;
         node.count = 0;
         int left_count = mid - first, right_count = count - left_count;
+        int left_height = 0, right_height = 0;
         if (count >= kParallelThreshold && depth < spawn_depth_) {
-            std::thread worker([=] { build(left + 1, mid, right_count, depth + 1); });
-            build(left, first, left_count, depth + 1);
+            std::thread worker([&, left, mid, right_count, depth] {
+                right_height = build(left + 1, mid, right_count, depth + 1, right_box, right_keys);
+            });
+            left_height = build(left, first, left_count, depth + 1, left_box, left_keys);
             worker.join();
         } else {
-            build(left, first, left_count, depth + 1);
-            build(left + 1, mid, right_count, depth + 1);
+            left_height = build(left, first, left_count, depth + 1, left_box, left_keys);
+            right_height = build(left + 1, mid, right_count, depth + 1, right_box, right_keys);
         }
+        nodes_[index].height = 1 + std::max(left_height, right_height);
+        return nodes_[index].height;
     }
 
+    const BuildNode* nodes() const { return nodes_.get(); }
     int node_count() const { return next_.load(); }
-    const std::vector<BuildNode>& nodes() const { return nodes_; }
     int max_depth() const { return max_depth_.load(); }
-    int leaf_count() const { return leaf_count_.load(); }
 
 private:
-    void make_leaf(int depth) {
-        leaf_count_.fetch_add(1, std::memory_order_relaxed);
+    int make_leaf(int depth) {
         int d = max_depth_.load(std::memory_order_relaxed);
         while (depth > d && !max_depth_.compare_exchange_weak(d, depth)) {
         }
+        return 0;
     }
 
-    int alloc_pair() { return next_.fetch_add(2, std::memory_order_relaxed); }
-
-    static int widest_axis(const Box& b) {
-        float e[3] = {b.hi[0] - b.lo[0], b.hi[1] - b.lo[1], b.hi[2] - b.lo[2]};
-        return e[0] >= e[1] && e[0] >= e[2] ? 0 : (e[1] >= e[2] ? 1 : 2);
-    }
-
-    // Binned SAH over the centroid bounds on all three axes. On success sets the axis, the
-    // partition point (refs reordered) and the SAH cost of the split, in units of
-    // kIntersectionCost-weighted triangle tests as for a leaf; mid stays -1 if no bin boundary
-    // separates the centroids.
-    void find_sah_split(int first, int count, const Box& box, const Box& centroids, int* axis_out,
-                        int* mid_out, float* cost_out) {
-        struct Bin {
-            Box box;
-            int count = 0;
-        };
-        Bin bins[3][kBinCount];
-        float scale[3], offset[3];
-        for (int k = 0; k < 3; ++k) {
-            float extent = centroids.hi[k] - centroids.lo[k];
-            // Slightly under kBinCount / extent so the largest centroid lands in the last bin.
-            scale[k] = extent > 0 ? float(kBinCount) * (1.0f - 1e-6f) / extent : 0.0f;
-            offset[k] = centroids.lo[k];
+    Split find_split(int first, int count, int depth, const Bounds4& keys) {
+        BinMapping map(std::min(kMaxBins, std::max(kMinBins, count)), keys);
+        // find_split does not recurse, so one scratch set of bins per thread will do.
+        thread_local Bins bins;
+        bins.init(map);
+        // Near the root, where few subtrees run in parallel yet, bin on several threads.
+        int threads = count >= kParallelBinning ? std::max(1, threads_ >> depth) : 1;
+        if (threads > 1) {
+            std::vector<std::unique_ptr<Bins>> partial;
+            std::vector<std::thread> pool;
+            for (int t = 1; t < threads; ++t) {
+                partial.push_back(std::make_unique<Bins>());
+                partial.back()->init(map);
+                int begin = first + int(int64_t(count) * t / threads);
+                int end = first + int(int64_t(count) * (t + 1) / threads);
+                pool.emplace_back([this, b = partial.back().get(), begin, end] { b->add(refs_.data(), begin, end); });
+            }
+            bins.add(refs_.data(), first, first + count / threads);
+            for (auto& th : pool) th.join();
+            for (auto& p : partial) bins.merge(*p);
+        } else {
+            bins.add(refs_.data(), first, first + count);
         }
-        auto bin_of = [&](const PrimRef& r, int k) {
-            int b = int((r.centroid2(k) - offset[k]) * scale[k]);
-            return std::min(std::max(b, 0), kBinCount - 1);
-        };
+        return best_split(bins);
+    }
+
+    // Partitions [first, first + count) by the split (Hoare's two-pointer scheme), collecting
+    // the key bounds of each side on the way; returns the first ref of the right side.
+    int partition(int first, int count, const Split& split, Bounds4* left_keys, Bounds4* right_keys) {
+        PrimRef* refs = refs_.data();
+        int l = first, r = first + count;
+        auto goes_left = [&](const PrimRef& p) { return split.map.bin_of(p, split.key) < split.bin; };
+        for (;;) {
+            while (l < r && goes_left(refs[l])) left_keys->extend(refs[l++].keys());
+            while (l < r && !goes_left(refs[r - 1])) right_keys->extend(refs[--r].keys());
+            if (l >= r) break;
+            std::swap(refs[l], refs[r - 1]);
+            left_keys->extend(refs[l++].keys());
+            right_keys->extend(refs[--r].keys());
+        }
+        return l;
+    }
+
+    int median_split(int first, int count, const Bounds4& keys, Bounds4* left_box, Bounds4* right_box,
+                     Bounds4* left_keys, Bounds4* right_keys) {
+        alignas(16) float lo[4], hi[4];
+        keys.lo.store(lo);
+        keys.hi.store(hi);
+        float e[3] = {hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]};
+        int axis = e[0] >= e[1] && e[0] >= e[2] ? 0 : (e[1] >= e[2] ? 1 : 2);
+        int mid = first + count / 2;
+        PrimRef* refs = refs_.data();
+        std::nth_element(refs + first, refs + mid, refs + first + count,
+                         [axis](const PrimRef& a, const PrimRef& b) { return a.key(axis) < b.key(axis); });
         for (int i = first; i < first + count; ++i) {
-            const PrimRef& r = refs_[i];
-            for (int k = 0; k < 3; ++k) {
-                Bin& bin = bins[k][bin_of(r, k)];
-                bin.count++;
-                bin.box.extend(r.lo, r.hi);
-            }
+            Bounds4& b = i < mid ? *left_box : *right_box;
+            Bounds4& k = i < mid ? *left_keys : *right_keys;
+            b.extend(refs[i].box_lo(), refs[i].box_hi());
+            k.extend(refs[i].keys());
         }
-
-        float best = INFINITY;
-        int best_axis = -1, best_bin = -1;
-        for (int k = 0; k < 3; ++k) {
-            if (scale[k] == 0) continue;
-            // Right-to-left sweep: cost of the right side of every boundary.
-            float right_cost[kBinCount];
-            Box acc;
-            int n = 0;
-            for (int b = kBinCount - 1; b > 0; --b) {
-                acc.extend(bins[k][b].box);
-                n += bins[k][b].count;
-                right_cost[b] = n ? acc.half_area() * float(n) : INFINITY;
-            }
-            acc = Box();
-            n = 0;
-            for (int b = 0; b < kBinCount - 1; ++b) {
-                acc.extend(bins[k][b].box);
-                n += bins[k][b].count;
-                if (n == 0) continue;
-                float cost = acc.half_area() * float(n) + right_cost[b + 1];
-                if (cost < best) {
-                    best = cost;
-                    best_axis = k;
-                    best_bin = b + 1;  // bins [0, b] go left
-                }
-            }
-        }
-        if (best_axis < 0 || !(best < INFINITY)) return;
-        float parent_area = box.half_area();
-        *cost_out = parent_area > 0 ? kTraversalCost + kIntersectionCost * best / parent_area
-                                    : kTraversalCost + kIntersectionCost * float(count);
-        PrimRef* begin = refs_.data() + first;
-        PrimRef* split = std::partition(begin, begin + count,
-                                        [&](const PrimRef& r) { return bin_of(r, best_axis) < best_bin; });
-        int mid = int(split - refs_.data());
-        if (mid == first || mid == first + count) return;  // cannot happen; be safe
-        *axis_out = best_axis;
-        *mid_out = mid;
+        return mid;
     }
 
     std::vector<PrimRef>& refs_;
-    std::vector<BuildNode> nodes_;
+    std::unique_ptr<BuildNode[]> nodes_;
+    int threads_;
+    int spawn_depth_ = 0;
     std::atomic<int> next_{1};  // node 0 is the root
     std::atomic<int> max_depth_{0};
-    std::atomic<int> leaf_count_{0};
-    int spawn_depth_ = 0;
 };
 
-// Writes the subtree of build node `index` depth-first to `out`.
-void flatten(const std::vector<BuildNode>& nodes, int index, std::vector<BvhNode>& out) {
-    // Explicit stack of (build node, parent slot to patch with our position).
-    struct Item {
-        int index;
-        int parent;  // flattened parent whose `offset` is this node's position, or -1
-    };
-    std::vector<Item> stack;
-    stack.push_back({index, -1});
-    while (!stack.empty()) {
-        Item item = stack.back();
-        stack.pop_back();
-        const BuildNode& b = nodes[item.index];
-        int pos = int(out.size());
-        if (item.parent >= 0) out[item.parent].offset = pos;
-        BvhNode n;
-        std::memcpy(n.lo, b.box.lo, sizeof n.lo);
-        std::memcpy(n.hi, b.box.hi, sizeof n.hi);
-        if (b.count > 0) {
-            n.offset = b.first;
-            n.meta = uint32_t(b.count);
-            out.push_back(n);
-        } else {
-            n.offset = -1;  // patched when the second child is written
-            n.meta = uint32_t(b.axis) << BVH_META_AXIS_SHIFT;
-            out.push_back(n);
-            stack.push_back({b.left + 1, pos});  // second child: after the whole first subtree
-            stack.push_back({b.left, -1});       // first child: right after this node
+// Collapses the binary tree into 4-wide nodes (as Embree's BVH4 builder: each wide node takes a
+// binary node's two children and repeatedly opens the child with the largest surface area) and
+// writes them depth-first.
+//
+// Stack bound: a traversal holds, on reaching a wide node, the entries its ancestors pushed
+// (`used`), and pushes up to k more for the node's k children. Opening a child is allowed only
+// if afterwards every child x keeps used + (k - 1) + height(x) <= BVH_STACK_SIZE - 1, where
+// height(x) is x's binary height: a subtree that is never opened again pushes at most one entry
+// per binary level, so the bound holds all the way down. At the root used = 0 and the binary
+// build keeps height <= BVH_STACK_SIZE - 1, so the traversal stack never overflows.
+class Collapser {
+public:
+    Collapser(const BuildNode* nodes, std::vector<BvhNode>& out) : nodes_(nodes), out_(out) {}
+
+    void run(int triangle_count) {
+        int children[BVH_WIDTH];
+        int k = 0;
+        if (triangle_count > 0) {
+            if (nodes_[0].count > 0) {
+                children[k++] = 0;  // a single leaf: the root node holds it as its only child
+            } else {
+                k = open(0, 0, children);
+            }
         }
+        emit(children, k, 0, 0);
     }
+
+    int max_depth = 0;
+    int leaf_count = 0;
+    int max_stack = 0;
+
+private:
+    static constexpr int kStackLimit = BVH_STACK_SIZE - 1;
+
+    int height(int b) const { return nodes_[b].count > 0 ? 0 : nodes_[b].height; }
+
+    // Children of the wide node made from binary interior node b, for a traversal holding
+    // `used` entries on arrival.
+    int open(int b, int used, int* children) const {
+        int k = 2;
+        children[0] = nodes_[b].left;
+        children[1] = nodes_[b].left + 1;
+        while (k < BVH_WIDTH) {
+            // Open the interior child of largest area among those the stack bound allows.
+            int best = -1;
+            float best_area = -1;
+            for (int i = 0; i < k; ++i) {
+                const BuildNode& c = nodes_[children[i]];
+                if (c.count > 0) continue;
+                float area = c.half_area();
+                if (area <= best_area) continue;
+                // After opening: k + 1 children, the opened one replaced by its two.
+                bool fits = used + k + height(c.left) <= kStackLimit && used + k + height(c.left + 1) <= kStackLimit;
+                for (int j = 0; j < k && fits; ++j)
+                    if (j != i && used + k + height(children[j]) > kStackLimit) fits = false;
+                if (!fits) continue;
+                best = i;
+                best_area = area;
+            }
+            if (best < 0) break;
+            int opened = children[best];
+            for (int j = k; j > best + 1; --j) children[j] = children[j - 1];
+            children[best] = nodes_[opened].left;
+            children[best + 1] = nodes_[opened].left + 1;
+            ++k;
+        }
+        return k;
+    }
+
+    // Writes the wide node with the given binary children (k of them) and, after it, their
+    // subtrees; returns its index.
+    int emit(const int* children, int k, int used, int depth) {
+        int index = int(out_.size());
+        out_.emplace_back();
+        BvhNode node;
+        std::memset(&node, 0, sizeof node);
+        for (int i = 0; i < BVH_WIDTH; ++i) {
+            for (int axis = 0; axis < 3; ++axis) {
+                node.bounds[2 * axis][i] = INFINITY;  // empty: no ray enters
+                node.bounds[2 * axis + 1][i] = -INFINITY;
+            }
+            node.child[i] = BVH_LEAF(0, 0);
+        }
+        max_stack = std::max(max_stack, used + k);
+        for (int i = 0; i < k; ++i) {
+            const BuildNode& c = nodes_[children[i]];
+            for (int axis = 0; axis < 3; ++axis) {
+                node.bounds[2 * axis][i] = c.lo[axis];
+                node.bounds[2 * axis + 1][i] = c.hi[axis];
+            }
+            if (c.count > 0) {
+                node.child[i] = BVH_LEAF(c.first, c.count);
+                ++leaf_count;
+                max_depth = std::max(max_depth, depth + 1);
+            } else {
+                int grandchildren[BVH_WIDTH];
+                int child_used = used + k - 1;
+                int kc = open(children[i], child_used, grandchildren);
+                node.child[i] = emit(grandchildren, kc, child_used, depth + 1);
+            }
+        }
+        out_[size_t(index)] = node;
+        return index;
+    }
+
+    const BuildNode* nodes_;
+    std::vector<BvhNode>& out_;
+};
+
+// Fills refs [begin, end) from the triangles; returns their box and key bounds.
+std::pair<Bounds4, Bounds4> make_refs(const std::vector<Triangle>& triangles, std::vector<PrimRef>& refs, size_t begin,
+                                      size_t end) {
+    Bounds4 box, keys;
+    for (size_t i = begin; i < end; ++i) {
+        const Triangle& t = triangles[i];
+        PrimRef& r = refs[i];
+        for (int k = 0; k < 3; ++k) {
+            float a = t.p0.s[k], b = t.p1.s[k], c = t.p2.s[k];
+            r.lo[k] = std::min(a, std::min(b, c));
+            r.hi[k] = std::max(a, std::max(b, c));
+        }
+        float dx = r.hi[0] - r.lo[0], dy = r.hi[1] - r.lo[1], dz = r.hi[2] - r.lo[2];
+        // Zero-area boxes (axis-aligned segments, points) get the smallest normal float's log.
+        r.size = std::log2(std::max(dx * dy + dy * dz + dz * dx, 1.17549435e-38f));
+        r.index = uint32_t(i);
+        box.extend(r.box_lo(), r.box_hi());
+        keys.extend(r.keys());
+    }
+    return {box, keys};
+}
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 }  // namespace
@@ -289,59 +556,52 @@ Bvh build_bvh(const std::vector<Triangle>& triangles) {
     auto start = std::chrono::steady_clock::now();
     Bvh bvh;
     size_t n = triangles.size();
-    if (n > size_t(INT32_MAX) / 2) throw Error("too many triangles for the BVH: " + std::to_string(n));
+    // Leaf entries hold the first triangle in the bits above the count.
+    if (n >= (size_t(1) << (31 - BVH_LEAF_BITS)))
+        throw Error("too many triangles for the BVH: " + std::to_string(n));
     if (n == 0) {
-        // One empty leaf with an empty box: every ray misses it.
-        BvhNode leaf;
-        for (int k = 0; k < 3; ++k) {
-            leaf.lo[k] = INFINITY;
-            leaf.hi[k] = -INFINITY;
-        }
-        leaf.offset = 0;
-        leaf.meta = 0;
-        // meta count 0 would read as interior; an empty tree is traversed as a leaf by
-        // giving it count 0 and a box no ray can enter (the slab test fails first).
-        bvh.nodes.push_back(leaf);
-        bvh.leaf_count = 1;
-        bvh.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        // A root with four empty slots: every ray misses it.
+        Collapser collapser(nullptr, bvh.nodes);
+        collapser.run(0);
+        bvh.build_seconds = seconds_since(start);
         return bvh;
     }
 
     std::vector<PrimRef> refs(n);
-    auto make_refs = [&](size_t begin, size_t end) {
-        for (size_t i = begin; i < end; ++i) {
-            const Triangle& t = triangles[i];
-            PrimRef& r = refs[i];
-            for (int k = 0; k < 3; ++k) {
-                float a = t.p0.s[k], b = t.p1.s[k], c = t.p2.s[k];
-                r.lo[k] = std::min(a, std::min(b, c));
-                r.hi[k] = std::max(a, std::max(b, c));
-            }
-            r.index = uint32_t(i);
-            r.pad = 0;
-        }
-    };
-    unsigned threads = std::max(1u, std::thread::hardware_concurrency());
-    if (n >= size_t(kParallelThreshold) && threads > 1) {
+    int threads = int(std::max(1u, std::thread::hardware_concurrency()));
+    if (n < size_t(kParallelThreshold)) threads = 1;
+    std::vector<std::pair<Bounds4, Bounds4>> bounds(static_cast<size_t>(threads));
+    {
         std::vector<std::thread> pool;
-        for (unsigned t = 0; t < threads; ++t)
-            pool.emplace_back(make_refs, n * t / threads, n * (t + 1) / threads);
+        for (int t = 1; t < threads; ++t) {
+            pool.emplace_back([&, t] {
+                bounds[size_t(t)] = make_refs(triangles, refs, n * size_t(t) / size_t(threads),
+                                              n * size_t(t + 1) / size_t(threads));
+            });
+        }
+        bounds[0] = make_refs(triangles, refs, 0, n / size_t(threads));
         for (auto& th : pool) th.join();
-    } else {
-        make_refs(0, n);
+    }
+    Bounds4 box, keys;
+    for (const auto& b : bounds) {
+        box.extend(b.first);
+        keys.extend(b.second);
     }
 
-    Builder builder(refs, int(threads));
-    builder.build(0, 0, int(n), 0);
+    Builder builder(refs, threads);
+    builder.build(0, 0, int(n), 0, box, keys);
 
-    bvh.nodes.reserve(size_t(builder.node_count()));
-    flatten(builder.nodes(), 0, bvh.nodes);
+    bvh.nodes.reserve(size_t(builder.node_count()) / 2 + 1);
+    Collapser collapser(builder.nodes(), bvh.nodes);
+    collapser.run(int(n));
     bvh.order.resize(n);
     for (size_t i = 0; i < n; ++i) bvh.order[i] = refs[i].index;
-    bvh.max_depth = builder.max_depth();
-    bvh.leaf_count = builder.leaf_count();
-    if (bvh.max_depth >= BVH_MAX_DEPTH) throw Error("BVH deeper than BVH_MAX_DEPTH (builder bug)");
-    bvh.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    bvh.max_depth = collapser.max_depth;
+    bvh.leaf_count = collapser.leaf_count;
+    bvh.max_stack = collapser.max_stack;
+    if (builder.max_depth() >= BVH_STACK_SIZE || bvh.max_stack > BVH_STACK_SIZE)
+        throw Error("BVH traversal stack bound exceeded (builder bug)");
+    bvh.build_seconds = seconds_since(start);
     return bvh;
 }
 

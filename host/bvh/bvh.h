@@ -1,4 +1,5 @@
-// Binned-SAH BVH over triangles, flattened depth-first into BvhNode (cl/shared/types.h).
+// Binned-SAH BVH over triangles, collapsed to 4-wide nodes and flattened depth-first into
+// BvhNode (cl/shared/types.h).
 #pragma once
 
 #include <cstdint>
@@ -12,8 +13,9 @@ struct Bvh {
     std::vector<BvhNode> nodes;
     std::vector<uint32_t> order;  // order[i] = index (before reordering) of the i-th triangle
     double build_seconds = 0;
-    int max_depth = 0;
+    int max_depth = 0;   // wide nodes on the longest root-to-leaf path
     int leaf_count = 0;
+    int max_stack = 0;   // most traversal stack entries any ray can need (<= BVH_STACK_SIZE)
 };
 
 // Builds the BVH. Triangles must be finite (the scene loader guarantees it).

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <cstdio>
 #include <fstream>
+#include <memory>
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -17,6 +18,7 @@
 #include "render/aov.h"
 #include "render/device_scene.h"
 #include "render/features.h"
+#include "render/render_loop.h"
 #include "render/renderer.h"
 #include "scene/scene.h"
 #include "util/error.h"
@@ -155,16 +157,22 @@ int run_render(const RenderArgs& args) {
     if (options.spp < 1 && options.time_budget <= 0) throw Error("--spp must be at least 1");
     int aov = args.aov.empty() ? -1 : parse_aov(args.aov);
 
-    DeviceEntry entry = select_device(args.device);
-    DeviceContext device(entry);
+    std::vector<DeviceEntry> entries = select_devices(args.device);
+    std::vector<std::unique_ptr<DeviceContext>> devices;
+    std::string device_names;
+    for (const DeviceEntry& e : entries) {
+        devices.push_back(std::make_unique<DeviceContext>(e));
+        device_names += (device_names.empty() ? "" : " + ") + e.name;
+    }
+    DeviceContext& device = *devices.front();
     DeviceScene ds = build_device_scene(scene, width, height);
     if (args.verbose)
         std::fprintf(stderr, "clbdpt: device %s; %zu triangles, %zu BVH nodes (%.3f s), %zu lights\n",
-                     entry.name.c_str(), ds.triangles.size(), ds.nodes.size(), ds.bvh_build_seconds, ds.lights.size());
+                     device_names.c_str(), ds.triangles.size(), ds.nodes.size(), ds.bvh_build_seconds, ds.lights.size());
 
     ImageMetadata meta;
     meta.strings.push_back({"clbdpt:scene", args.scene});
-    meta.strings.push_back({"clbdpt:device", entry.name});
+    meta.strings.push_back({"clbdpt:device", device_names});
 
     if (aov >= 0) {
         std::vector<float> rgb = render_aov(device, ds, aov);
@@ -178,16 +186,22 @@ int run_render(const RenderArgs& args) {
     ProgressBar bar(tty);
     const uint64_t pixels = uint64_t(width) * uint64_t(height);
     options.progress = [&](int done, int total, double seconds) { bar.update(done, total, seconds, pixels); };
-    Renderer renderer(device, ds, options);
-    if (args.verbose) {
-        std::string flags;
-        for (const std::string& d : renderer.stats().defines) flags += " -D" + d;
-        std::fprintf(stderr, "clbdpt: kernel flags:%s\nclbdpt: kernel %s in %.2f s\n", flags.c_str(),
-                     renderer.stats().program_from_cache ? "loaded from cache" : "built", renderer.stats().build_seconds);
+    std::vector<std::unique_ptr<Renderer>> renderers;
+    std::vector<Renderer*> renderer_list;
+    for (auto& d : devices) {
+        renderers.push_back(std::make_unique<Renderer>(*d, ds, options));
+        renderer_list.push_back(renderers.back().get());
+        if (args.verbose) {
+            const RenderStats& rs = renderers.back()->stats();
+            std::string flags;
+            for (const std::string& def : rs.defines) flags += " -D" + def;
+            std::fprintf(stderr, "clbdpt: kernel flags:%s\nclbdpt: kernel for %s %s in %.2f s\n", flags.c_str(),
+                         d->entry().name.c_str(), rs.program_from_cache ? "loaded from cache" : "built", rs.build_seconds);
+        }
     }
-    Film film = renderer.render();
+    RenderStats st;
+    Film film = render_image(renderer_list, options, &st);
     bar.finish();
-    const RenderStats& st = renderer.stats();
 
     meta.strings.push_back({"clbdpt:integrator", integrator_name(options.integrator)});
     meta.strings.push_back({"clbdpt:sampler", sampler_name(options.sampler)});
@@ -219,7 +233,8 @@ int run_render(const RenderArgs& args) {
         j["kernel_build_seconds"] = st.build_seconds;
         j["kernel_from_cache"] = st.program_from_cache;
         j["kernel_defines"] = st.defines;
-        j["device"] = entry.name;
+        j["device"] = device_names;
+        j["devices"] = entries.size();
         j["triangles"] = ds.triangles.size();
         j["bvh_build_seconds"] = ds.bvh_build_seconds;
         write_text_atomically(args.stats, j.dump(2) + "\n");
@@ -252,7 +267,9 @@ int main(int argc, char** argv) {
     render->add_option("--time", args.time_budget, "Render whole passes until this many seconds are spent");
     render->add_option("--max-depth", args.max_depth, "Maximum scattering vertices per path (default: scene's)");
     render->add_option("--seed", args.seed, "Random seed (default: the scene's render.seed)");
-    render->add_option("--device", args.device, "Device index or name substring (default: first GPU, else first CPU)");
+    render->add_option("--device", args.device,
+                       "Device index or name substring (default: first GPU, else first CPU); several separated "
+                       "by commas, or 'all', share the render");
     render->add_option("--width", args.width, "Film width override")->check(CLI::PositiveNumber);
     render->add_option("--height", args.height, "Film height override")->check(CLI::PositiveNumber);
     render->add_option("--stats", args.stats, "Write a JSON summary (spp, seconds, samples/s, rays/s, ...)");

@@ -25,11 +25,10 @@ namespace {
 static_assert(sizeof(clbdpt_float4) == 16 && alignof(clbdpt_float4) == 16, "cl_float4 must be 16 bytes, 16-aligned");
 static_assert(sizeof(clbdpt_int) == 4 && sizeof(clbdpt_uint) == 4 && sizeof(float) == 4, "32-bit scalars");
 
-CLBDPT_CHECK_STRUCT(BvhNode, 32, 4);
-CLBDPT_CHECK_FIELD(BvhNode, lo, 0);
-CLBDPT_CHECK_FIELD(BvhNode, offset, 12);
-CLBDPT_CHECK_FIELD(BvhNode, hi, 16);
-CLBDPT_CHECK_FIELD(BvhNode, meta, 28);
+CLBDPT_CHECK_STRUCT(BvhNode, 32 * BVH_WIDTH, 4);
+CLBDPT_CHECK_FIELD(BvhNode, bounds, 0);
+CLBDPT_CHECK_FIELD(BvhNode, child, 24 * BVH_WIDTH);
+CLBDPT_CHECK_FIELD(BvhNode, pad, 28 * BVH_WIDTH);
 
 CLBDPT_CHECK_STRUCT(Triangle, 48, 16);
 CLBDPT_CHECK_FIELD(Triangle, p0, 0);

@@ -336,6 +336,29 @@ DeviceEntry select_device(const std::string& spec) {
     throw Error("unknown device '" + spec + "' (see `clbdpt devices`)");
 }
 
+std::vector<DeviceEntry> select_devices(const std::string& specs) {
+    if (specs == "all") {
+        std::vector<DeviceEntry> devices = list_devices();
+        if (devices.empty()) throw Error("no OpenCL device found (is pocl-opencl-icd installed?)");
+        return devices;
+    }
+    std::vector<DeviceEntry> chosen;
+    size_t start = 0;
+    for (;;) {
+        size_t comma = specs.find(',', start);
+        std::string spec = specs.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+        DeviceEntry entry = select_device(spec);
+        for (const DeviceEntry& c : chosen)
+            if (c.index == entry.index)
+                throw Error("device " + std::to_string(entry.index) + " ('" + entry.name + "') named twice in '" +
+                            specs + "'");
+        chosen.push_back(entry);
+        if (comma == std::string::npos) break;
+        start = comma + 1;
+    }
+    return chosen;
+}
+
 DeviceContext::DeviceContext(const DeviceEntry& entry, bool profiling) : entry_(entry) {
     try {
         context_ = cl::Context(entry_.device);

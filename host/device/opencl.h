@@ -40,6 +40,10 @@ std::vector<DeviceEntry> list_devices();
 // Throws Error("unknown device 'x' (see `clbdpt devices`)") or Error("no OpenCL device ...").
 DeviceEntry select_device(const std::string& spec);
 
+// Several devices: specs separated by commas, or "all" for every device. Each device at most
+// once (a spec naming one already chosen is an error). Throws Error like select_device.
+std::vector<DeviceEntry> select_devices(const std::string& specs);
+
 struct ProgramBuild {
     cl::Program program;
     double seconds = 0;      // wall time to get a usable program (build or cache load)

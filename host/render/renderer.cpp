@@ -1,7 +1,6 @@
 #include "render/renderer.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 
 #include "util/error.h"
@@ -9,12 +8,6 @@
 namespace clbdpt {
 
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-double seconds_since(Clock::time_point start) {
-    return std::chrono::duration<double>(Clock::now() - start).count();
-}
 
 // Output memory per launch is bounded: a camera float4 and max_depth + 1 splat records per item.
 constexpr size_t kMaxBatchBytes = size_t(256) << 20;
@@ -24,6 +17,19 @@ constexpr int kMaxBatchItems = 1 << 18;
 constexpr cl_uint kParamsArg = SceneBuffers::kSceneArgCount;
 
 }  // namespace
+
+void Film::add(const Film& other) {
+    for (size_t i = 0; i < camera_sum.size(); ++i) camera_sum[i] += other.camera_sum[i];
+    for (size_t i = 0; i < light_sum.size(); ++i) light_sum[i] += other.light_sum[i];
+    if (!other.strategy_sum.empty()) {
+        if (strategy_sum.empty()) {
+            strategy_sum.assign(other.strategy_sum.size(), 0.0);
+            strategy_stride = other.strategy_stride;
+        }
+        for (size_t i = 0; i < strategy_sum.size(); ++i) strategy_sum[i] += other.strategy_sum[i];
+    }
+    spp += other.spp;
+}
 
 std::vector<float> Film::image() const {
     std::vector<float> out(camera_sum.size());
@@ -162,24 +168,6 @@ void Renderer::render_passes(Film& film, uint32_t first_sample, int count) {
             run_batch(film, first_sample + uint32_t(k), first, std::min(batch_items_, pixels - first));
         ++film.spp;
     }
-}
-
-Film Renderer::render() {
-    Film film(scene_.camera.width, scene_.camera.height);
-    const auto start = Clock::now();
-    if (options_.time_budget > 0) {
-        while (seconds_since(start) < options_.time_budget) {
-            render_passes(film, uint32_t(film.spp), 1);
-            if (options_.progress) options_.progress(film.spp, 0, seconds_since(start));
-        }
-    } else {
-        for (int pass = 0; pass < options_.spp; ++pass) {
-            render_passes(film, uint32_t(pass), 1);
-            if (options_.progress) options_.progress(film.spp, options_.spp, seconds_since(start));
-        }
-    }
-    stats_.seconds = seconds_since(start);
-    return film;
 }
 
 }  // namespace clbdpt

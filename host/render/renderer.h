@@ -29,7 +29,8 @@ struct RenderOptions {
     int local_size = 0;         // work-group size; 0 = the driver's choice
     enum class StrategyImages { Off, Weighted, Unweighted };
     StrategyImages strategy_images = StrategyImages::Off;  // also record each (s, t) apart
-    // Called after each pass: passes done, passes planned (0 if time-bound), seconds so far.
+    // Called now and then from the rendering thread: passes done, passes planned (0 if
+    // time-bound), seconds so far.
     std::function<void(int, int, double)> progress;
 };
 
@@ -45,6 +46,7 @@ struct Film {
     int strategy_stride = 0;  // max_depth + 3
 
     Film(int w, int h) : width(w), height(h), camera_sum(size_t(w) * h * 3), light_sum(size_t(w) * h * 3) {}
+    void add(const Film& other);  // merges sums and sample counts (another device's passes)
     std::vector<float> image() const;
     // The image of strategy (s, t) alone (sum / spp); requires strategy images.
     std::vector<float> strategy_image(int s, int t) const;
@@ -52,6 +54,11 @@ struct Film {
 
 struct RenderStats {
     double seconds = 0;           // wall time of the passes (excluding the kernel build)
+    void add(const RenderStats& other) {
+        samples += other.samples;
+        rays += other.rays;
+        build_seconds += other.build_seconds;
+    }
     double build_seconds = 0;     // kernel build or cache load
     bool program_from_cache = false;
     uint64_t samples = 0;         // pixel samples (one camera + one light subpath each)
@@ -66,10 +73,9 @@ public:
     // Renders samples [first_sample, first_sample + count) of every pixel into film.
     void render_passes(Film& film, uint32_t first_sample, int count);
 
-    // The whole render per options (spp or time budget).
-    Film render();
-
     const RenderStats& stats() const { return stats_; }
+    const DeviceContext& device() const { return device_; }
+    const DeviceScene& scene() const { return scene_; }
 
 private:
     void run_batch(Film& film, uint32_t sample_index, int first_pixel, int pixel_count);

@@ -1,0 +1,309 @@
+// Shared by the whole-image correctness tests (furnace_test, scene_agreement_test,
+// hard_cases_test): scenes built in code (triangles, quads, boxes, tessellated spheres with a
+// chosen facing), scene scaling, the CLBDPT_TEST_SCALE pass multiplier, and comparisons in
+// standard errors that also print one machine-readable line each for scripts/stat_report.sh:
+//
+//     STAT <test>/<comparison> <statistic> <threshold> <pass|fail>
+//
+// The statistic is the largest |difference| / (combined standard error) over the image mean
+// and the regions compared; the threshold is the number of standard errors allowed.
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "render_test_util.h"
+
+namespace clbdpt::test {
+
+// ---- Run length -------------------------------------------------------------------------
+
+// CLBDPT_TEST_SCALE (default 1) multiplies every pass count of the statistical tests, so a
+// report can run them longer (scripts/stat_report.sh). Thresholds stay in standard errors, so
+// a longer run is a sharper test of the same claim.
+inline int test_scale() {
+    static const int scale = [] {
+        const char* s = std::getenv("CLBDPT_TEST_SCALE");
+        int v = s ? std::atoi(s) : 1;
+        return v >= 1 ? v : 1;
+    }();
+    return scale;
+}
+
+inline int scaled_passes(int passes) { return passes * test_scale(); }
+
+// ---- Scenes built in code -------------------------------------------------------------
+
+inline cl_float4 float4_of(Vec3 v) {
+    cl_float4 r;
+    r.s[0] = v.x;
+    r.s[1] = v.y;
+    r.s[2] = v.z;
+    r.s[3] = 0.0f;
+    return r;
+}
+
+inline Vec3 vec3_of(const cl_float4& v) { return {v.s[0], v.s[1], v.s[2]}; }
+
+inline Material diffuse_material(Vec3 kd, Vec3 ke = {0, 0, 0}) {
+    Material m{};
+    m.kind = MATERIAL_DIFFUSE;
+    m.kd = float4_of(kd);
+    m.ke = float4_of(ke);
+    m.ior = 1.0f;
+    return m;
+}
+
+inline Material mirror_material(Vec3 ks) {
+    Material m{};
+    m.kind = MATERIAL_MIRROR;
+    m.ks = float4_of(ks);
+    m.ior = 1.0f;
+    return m;
+}
+
+inline Material glass_material(float ior) {
+    Material m{};
+    m.kind = MATERIAL_GLASS;
+    m.ks = float4_of({1, 1, 1});
+    m.ior = ior;
+    return m;
+}
+
+// Builds a Scene the way the loader leaves one: triangles in load order, one TriangleInfo
+// each (flat shading, light filled in by build_device_scene), bounds over every vertex.
+struct SceneBuilder {
+    Scene scene;
+
+    int material(const Material& m, const std::string& name = "") {
+        scene.materials.push_back(m);
+        scene.material_names.push_back(name.empty() ? "m" + std::to_string(scene.materials.size() - 1) : name);
+        return int(scene.materials.size()) - 1;
+    }
+
+    // Front face (the emitting one, the outside of glass) = counter-clockwise seen from it:
+    // normal = normalize(cross(b - a, c - a)).
+    void triangle(Vec3 a, Vec3 b, Vec3 c, int material) {
+        Triangle t;
+        t.p0 = float4_of(a);
+        t.p1 = float4_of(b);
+        t.p2 = float4_of(c);
+        TriangleInfo info{};
+        info.material = material;
+        info.light = -1;
+        info.normals = -1;
+        info.source_index = int(scene.triangles.size());
+        scene.triangles.push_back(t);
+        scene.infos.push_back(info);
+        scene.bounds.extend(a);
+        scene.bounds.extend(b);
+        scene.bounds.extend(c);
+    }
+
+    // a, b, c, d counter-clockwise seen from the front.
+    void quad(Vec3 a, Vec3 b, Vec3 c, Vec3 d, int material) {
+        triangle(a, b, c, material);
+        triangle(a, c, d, material);
+    }
+
+    // Axis-aligned box; inward: the faces' fronts look into the box (a room), else out of it.
+    void box(Vec3 lo, Vec3 hi, bool inward, int material) { box(lo, hi, inward, {material, material, material, material, material, material}); }
+
+    // materials: -x, +x, -y, +y, -z, +z faces.
+    void box(Vec3 lo, Vec3 hi, bool inward, const std::vector<int>& materials) {
+        Vec3 c[8];
+        for (int i = 0; i < 8; ++i) c[i] = {i & 1 ? hi.x : lo.x, i & 2 ? hi.y : lo.y, i & 4 ? hi.z : lo.z};
+        // Each face counter-clockwise seen from outside the box.
+        const int faces[6][4] = {{0, 4, 6, 2}, {1, 3, 7, 5}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 2, 3, 1}, {4, 5, 7, 6}};
+        for (int f = 0; f < 6; ++f) {
+            const int* q = faces[f];
+            if (inward)
+                quad(c[q[0]], c[q[3]], c[q[2]], c[q[1]], materials[f]);
+            else
+                quad(c[q[0]], c[q[1]], c[q[2]], c[q[3]], materials[f]);
+        }
+    }
+
+    // Watertight icosphere (an icosahedron subdivided `subdivisions` times, vertices projected
+    // onto the sphere and shared between neighbouring triangles bit for bit). inward: the
+    // front faces look toward the centre.
+    void sphere(Vec3 center, float radius, int subdivisions, bool inward, int material) {
+        const float t = (1.0f + std::sqrt(5.0f)) / 2.0f;
+        std::vector<Vec3> v = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
+                               {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+        for (Vec3& p : v) p = normalize(p);
+        std::vector<std::array<int, 3>> f = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
+                                              {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
+                                              {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},
+                                              {4, 9, 5},  {2, 4, 11}, {6, 2, 10},  {8, 6, 7},  {9, 8, 1}};
+        for (int s = 0; s < subdivisions; ++s) {
+            std::vector<std::array<int, 3>> next;
+            std::vector<std::pair<std::pair<int, int>, int>> mids;
+            auto midpoint = [&](int a, int b) {
+                std::pair<int, int> key(std::min(a, b), std::max(a, b));
+                for (auto& m : mids)
+                    if (m.first == key) return m.second;
+                v.push_back(normalize((v[a] + v[b]) * 0.5f));
+                mids.push_back({key, int(v.size()) - 1});
+                return int(v.size()) - 1;
+            };
+            for (auto& tri : f) {
+                int a = midpoint(tri[0], tri[1]), b = midpoint(tri[1], tri[2]), c = midpoint(tri[2], tri[0]);
+                next.push_back({tri[0], a, c});
+                next.push_back({tri[1], b, a});
+                next.push_back({tri[2], c, b});
+                next.push_back({a, b, c});
+            }
+            f.swap(next);
+        }
+        // The base faces are counter-clockwise seen from outside.
+        for (auto& tri : f) {
+            Vec3 a = center + v[tri[0]] * radius, b = center + v[tri[1]] * radius, c = center + v[tri[2]] * radius;
+            if (inward)
+                triangle(a, c, b, material);
+            else
+                triangle(a, b, c, material);
+        }
+    }
+
+    void camera(Vec3 eye, Vec3 target, float fov_degrees, Vec3 up = {0, 1, 0}) {
+        scene.camera.eye = eye;
+        scene.camera.target = target;
+        scene.camera.up = up;
+        scene.camera.fov_degrees = fov_degrees;
+        scene.camera.lens_radius = 0.0f;
+        scene.camera.focus_distance = length(target - eye);
+    }
+};
+
+// Every length in the scene times s: vertices, camera, light positions, bounds. Radiance and
+// reflectance do not change, so the image must not either (point and spot intensities would
+// need s^2 to keep irradiance; the scenes scaled here have none).
+inline void scale_scene(Scene& scene, float s) {
+    auto scale4 = [s](cl_float4& p) {
+        for (int i = 0; i < 3; ++i) p.s[i] *= s;
+    };
+    Bounds3 bounds;
+    for (Triangle& t : scene.triangles) {
+        scale4(t.p0);
+        scale4(t.p1);
+        scale4(t.p2);
+        bounds.extend(vec3_of(t.p0));
+        bounds.extend(vec3_of(t.p1));
+        bounds.extend(vec3_of(t.p2));
+    }
+    scene.bounds = bounds;
+    scene.camera.eye = scene.camera.eye * s;
+    scene.camera.target = scene.camera.target * s;
+    scene.camera.focus_distance *= s;
+    scene.camera.lens_radius *= s;
+    for (LightDesc& l : scene.lights) {
+        l.position = l.position * s;
+        l.target = l.target * s;
+    }
+}
+
+// ---- Statistics -------------------------------------------------------------------------
+
+inline std::string current_test_name() {
+    const ::testing::TestInfo* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    if (!info) return "unknown";
+    std::string name = std::string(info->test_suite_name()) + "." + info->name();
+    return name;
+}
+
+// One STAT line per comparison (stdout), parsed by scripts/stat_report.sh; spaces in names
+// become underscores so the line splits on whitespace.
+inline void report_stat(const std::string& comparison, double statistic, double threshold, bool pass) {
+    std::string name = current_test_name() + "/" + comparison;
+    std::replace(name.begin(), name.end(), ' ', '_');
+    char line[512];
+    std::snprintf(line, sizeof line, "STAT %s %.4g %.4g %s", name.c_str(), statistic, threshold, pass ? "pass" : "fail");
+    std::cout << line << std::endl;
+}
+
+// Whether two independent estimates agree region by region and on the image mean within
+// `sigmas` combined standard errors. rel_floor: a floor on the standard error relative to
+// the compared values, for estimators that are (nearly) deterministic (float rounding of the
+// per-sample products is ~1e-6 relative; the floor is well above it and well below any error
+// worth catching). Prints one STAT line (the worst |z|) and fails the test through EXPECT.
+inline double expect_agree(const RegionStats& a, const RegionStats& b, double sigmas, const std::string& what,
+                           double rel_floor = 1e-5) {
+    double worst = 0;
+    auto z_of = [&](double ma, double sa, double mb, double sb) {
+        double floor = rel_floor * std::max(std::fabs(ma), std::fabs(mb));
+        double se = std::sqrt(sa * sa + sb * sb + floor * floor);
+        double d = std::fabs(ma - mb);
+        double z = se > 0 ? d / se : (d > 0 ? INFINITY : 0.0);
+        return std::isnan(z) ? INFINITY : z;  // a NaN estimate is a failure, not a skip
+    };
+    for (size_t r = 0; r < a.mean.size(); ++r) {
+        double z = z_of(a.mean[r], a.std_error[r], b.mean[r], b.std_error[r]);
+        worst = std::max(worst, z);
+        EXPECT_LE(z, sigmas) << what << " region " << r << ": " << a.mean[r] << " +- " << a.std_error[r] << " vs "
+                             << b.mean[r] << " +- " << b.std_error[r] << " (" << z << " standard errors)";
+    }
+    double z = z_of(a.image_mean, a.image_std_error, b.image_mean, b.image_std_error);
+    worst = std::max(worst, z);
+    EXPECT_LE(z, sigmas) << what << " image mean: " << a.image_mean << " +- " << a.image_std_error << " vs "
+                         << b.image_mean << " +- " << b.image_std_error << " (" << z << " standard errors)";
+    report_stat(what, worst, sigmas, !(worst > sigmas));
+    return worst;
+}
+
+// Whether an estimate matches a known value in every region and on the image mean.
+inline double expect_matches(const RegionStats& a, double expected, double sigmas, const std::string& what,
+                             double rel_floor = 1e-5) {
+    RegionStats exact = a;
+    std::fill(exact.mean.begin(), exact.mean.end(), expected);
+    std::fill(exact.std_error.begin(), exact.std_error.end(), 0.0);
+    exact.image_mean = expected;
+    exact.image_std_error = 0.0;
+    return expect_agree(a, exact, sigmas, what, rel_floor);
+}
+
+// Renders `passes` independent passes and returns per-region statistics; any non-finite
+// sample makes the renderer throw clbdpt::Error, which fails the test with its message.
+inline RegionStats render_stats_or_fail(const DeviceScene& scene, const RenderOptions& options, int passes, int blocks,
+                                        const std::string& what) {
+    try {
+        return render_region_stats(scene, options, passes, blocks);
+    } catch (const std::exception& e) {
+        ADD_FAILURE() << what << ": render failed: " << e.what();
+        report_stat(what + "/finite", 1, 0, false);
+        RegionStats empty;
+        empty.blocks = blocks;
+        empty.mean.assign(size_t(blocks) * blocks, NAN);
+        empty.std_error.assign(size_t(blocks) * blocks, NAN);
+        empty.image_mean = NAN;
+        empty.image_std_error = NAN;
+        return empty;
+    }
+}
+
+inline RenderOptions make_options(Integrator integrator, int max_depth, uint32_t seed,
+                                  SamplerKind sampler = SamplerKind::Independent) {
+    RenderOptions o;
+    o.integrator = integrator;
+    o.max_depth = max_depth;
+    o.seed = seed;
+    o.sampler = sampler;
+    return o;
+}
+
+inline std::string options_name(const RenderOptions& o) {
+    std::string n = integrator_name(o.integrator);
+    if (o.sampler == SamplerKind::Sobol) n += "-sobol";
+    return n + "-d" + std::to_string(o.max_depth);
+}
+
+}  // namespace clbdpt::test
