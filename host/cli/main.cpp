@@ -43,6 +43,7 @@ struct RenderArgs {
     std::string strategy_images;
     bool unweighted = false;
     int local_size = 0;
+    bool profile = false;
     bool verbose = false;
     bool all_features = false;
 };
@@ -161,7 +162,7 @@ int run_render(const RenderArgs& args) {
     std::vector<std::unique_ptr<DeviceContext>> devices;
     std::string device_names;
     for (const DeviceEntry& e : entries) {
-        devices.push_back(std::make_unique<DeviceContext>(e));
+        devices.push_back(std::make_unique<DeviceContext>(e, args.profile));
         device_names += (device_names.empty() ? "" : " + ") + e.name;
     }
     DeviceContext& device = *devices.front();
@@ -239,6 +240,20 @@ int run_render(const RenderArgs& args) {
         j["bvh_build_seconds"] = ds.bvh_build_seconds;
         write_text_atomically(args.stats, j.dump(2) + "\n");
     }
+    if (args.profile) {
+        const RenderProfile& p = st.profile;
+        const double busy = p.kernel_seconds + p.transfer_seconds + p.accumulate_seconds;
+        auto row = [&](const char* what, double seconds) {
+            std::fprintf(stderr, "clbdpt: profile: %-28s %9.3f s  %5.1f%%\n", what, seconds,
+                         busy > 0 ? 100.0 * seconds / busy : 0.0);
+        };
+        row("render kernel (device)", p.kernel_seconds);
+        row("read-back (device)", p.transfer_seconds);
+        row("accumulation (host)", p.accumulate_seconds);
+        std::fprintf(stderr, "clbdpt: profile: kernel time per sample %.3f us, per ray %.3f us\n",
+                     st.samples ? 1e6 * p.kernel_seconds / double(st.samples) : 0.0,
+                     st.rays ? 1e6 * p.kernel_seconds / double(st.rays) : 0.0);
+    }
     std::fprintf(stderr,
                  "clbdpt: %s %d spp %dx%d in %.2f s: %.3f M samples/s, %.2f M rays/s; kernel %s %.2f s; wrote %s\n",
                  integrator_name(options.integrator), film.spp, width, height, st.seconds, sps * 1e-6, rps * 1e-6,
@@ -286,6 +301,8 @@ int main(int argc, char** argv) {
     render->add_flag("--all-features", args.all_features, "Build the kernel with every feature enabled (benchmarks)");
     render->add_option("--local-size", args.local_size, "OpenCL work-group size (default: the driver's choice)")
         ->check(CLI::PositiveNumber);
+    render->add_flag("--profile", args.profile,
+                     "Report time per stage (render kernel, read-back, host accumulation) from OpenCL profiling events");
     render->add_flag("-v,--verbose", args.verbose, "Print device, BVH and kernel flags");
 
     try {

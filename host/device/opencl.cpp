@@ -359,7 +359,7 @@ std::vector<DeviceEntry> select_devices(const std::string& specs) {
     return chosen;
 }
 
-DeviceContext::DeviceContext(const DeviceEntry& entry, bool profiling) : entry_(entry) {
+DeviceContext::DeviceContext(const DeviceEntry& entry, bool profiling) : entry_(entry), profiling_(profiling) {
     try {
         context_ = cl::Context(entry_.device);
         cl::QueueProperties props = profiling ? cl::QueueProperties::Profiling : cl::QueueProperties::None;

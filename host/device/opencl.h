@@ -60,6 +60,7 @@ public:
     const DeviceEntry& entry() const { return entry_; }
     cl::Context& context() { return context_; }
     cl::CommandQueue& queue() { return queue_; }
+    bool profiling() const { return profiling_; }
 
     // Builds (or loads from the disk cache, or returns the one already built in this process)
     // the program whose entry file is `entry_file` (relative to cl/, e.g. "kernels/render.cl")
@@ -72,6 +73,7 @@ private:
     cl::Context context_;
     cl::CommandQueue queue_;
     std::map<std::string, ProgramBuild> programs_;
+    bool profiling_ = false;
 };
 
 // The expanded source of a kernel entry file: every `#include "x"` replaced by the file's text

@@ -1,6 +1,7 @@
 #include "render/renderer.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 
 #include "util/error.h"
@@ -99,25 +100,40 @@ void Renderer::run_batch(Film& film, uint32_t sample_index, int first_pixel, int
     params.seed = options_.seed;
     params.max_depth = options_.max_depth;
     cl::CommandQueue& queue = device_.queue();
+    cl::Event kernel_done, camera_read, splats_read, strategies_read;
     try {
         kernel_.setArg(kParamsArg, params);
         if (options_.local_size > 0) {
             const size_t local = size_t(options_.local_size);
             const size_t global = (size_t(pixel_count) + local - 1) / local * local;
-            queue.enqueueNDRangeKernel(kernel_, cl::NullRange, cl::NDRange(global), cl::NDRange(local));
+            queue.enqueueNDRangeKernel(kernel_, cl::NullRange, cl::NDRange(global), cl::NDRange(local), nullptr,
+                                       &kernel_done);
         } else {
-            queue.enqueueNDRangeKernel(kernel_, cl::NullRange, cl::NDRange(size_t(pixel_count)), cl::NullRange);
+            queue.enqueueNDRangeKernel(kernel_, cl::NullRange, cl::NDRange(size_t(pixel_count)), cl::NullRange, nullptr,
+                                       &kernel_done);
         }
-        queue.enqueueReadBuffer(camera_out_, CL_FALSE, 0, sizeof(cl_float4) * pixel_count, camera_host_.data());
+        queue.enqueueReadBuffer(camera_out_, CL_FALSE, 0, sizeof(cl_float4) * pixel_count, camera_host_.data(), nullptr,
+                                &camera_read);
         queue.enqueueReadBuffer(splats_, CL_TRUE, 0, sizeof(SplatRecord) * size_t(pixel_count) * splat_slots_,
-                                splats_host_.data());
+                                splats_host_.data(), nullptr, &splats_read);
         if (strategy_slots_ > 0)
             queue.enqueueReadBuffer(strategy_out_, CL_TRUE, 0,
-                                    sizeof(SplatRecord) * size_t(pixel_count) * strategy_slots_, strategy_host_.data());
+                                    sizeof(SplatRecord) * size_t(pixel_count) * strategy_slots_, strategy_host_.data(),
+                                    nullptr, &strategies_read);
+        if (device_.profiling()) {
+            auto seconds = [](const cl::Event& e) {
+                return 1e-9 * double(e.getProfilingInfo<CL_PROFILING_COMMAND_END>() -
+                                     e.getProfilingInfo<CL_PROFILING_COMMAND_START>());
+            };
+            stats_.profile.kernel_seconds += seconds(kernel_done);
+            stats_.profile.transfer_seconds += seconds(camera_read) + seconds(splats_read);
+            if (strategy_slots_ > 0) stats_.profile.transfer_seconds += seconds(strategies_read);
+        }
     } catch (const cl::Error& e) {
         throw Error(std::string("OpenCL: ") + e.what() + ": " + cl_error_name(e.err()) + " while rendering on " +
                     device_.entry().name);
     }
+    const auto accumulate_start = std::chrono::steady_clock::now();
     const int width = params.width;
     for (int i = 0; i < pixel_count; ++i) {
         const cl_float4& c = camera_host_[i];
@@ -159,6 +175,8 @@ void Renderer::run_batch(Film& film, uint32_t sample_index, int first_pixel, int
         }
     }
     stats_.samples += uint64_t(pixel_count);
+    stats_.profile.accumulate_seconds +=
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - accumulate_start).count();
 }
 
 void Renderer::render_passes(Film& film, uint32_t first_sample, int count) {

@@ -52,9 +52,22 @@ struct Film {
     std::vector<float> strategy_image(int s, int t) const;
 };
 
+// Where a render's time goes (--profile): the render kernel and the read-back of its outputs
+// from OpenCL profiling events, the host's accumulation of camera sums and splat records from
+// a clock.
+struct RenderProfile {
+    double kernel_seconds = 0;
+    double transfer_seconds = 0;
+    double accumulate_seconds = 0;
+};
+
 struct RenderStats {
     double seconds = 0;           // wall time of the passes (excluding the kernel build)
+    RenderProfile profile;
     void add(const RenderStats& other) {
+        profile.kernel_seconds += other.profile.kernel_seconds;
+        profile.transfer_seconds += other.profile.transfer_seconds;
+        profile.accumulate_seconds += other.profile.accumulate_seconds;
         samples += other.samples;
         rays += other.rays;
         build_seconds += other.build_seconds;
