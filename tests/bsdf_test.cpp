@@ -169,9 +169,9 @@ const std::vector<double> kWoThetaDegrees = {25, 60, 84, 130};
 // Cells are rings around a centre direction (the mirror direction of wo, where a glossy lobe
 // peaks) times sectors in azimuth. Ring edges grow quadratically in angle (theta_k = pi (k/R)^2),
 // so a lobe of width 0.05 rad still spreads over several rings while the far rings stay large.
-// Expected counts come from adaptive Gauss-Legendre integration of the reference pdf over each
-// cell (the pdf jumps to 0 at the horizon, which cuts through cells; the adaptive rule refines
-// there).
+// Expected counts come from nested adaptive Gauss-Legendre integration of the reference pdf over
+// each cell, clipped analytically to wo's hemisphere (the pdf jumps to 0 at the horizon, which
+// cuts through cells; clipping keeps the integrand smooth, so the quadrature converges fast).
 
 constexpr int kRings = 20, kSectors = 24;
 
@@ -199,40 +199,56 @@ struct Binning {
 constexpr double kGlX[4] = {-0.8611363115940526, -0.3399810435848563, 0.3399810435848563, 0.8611363115940526};
 constexpr double kGlW[4] = {0.3478548451374538, 0.6521451548625461, 0.6521451548625461, 0.3478548451374538};
 
+template <typename F>
+double gl4(const F& f, double a, double b) {
+    double m = 0.5 * (a + b), h = 0.5 * (b - a), s = 0;
+    for (int i = 0; i < 4; ++i) s += kGlW[i] * f(m + h * kGlX[i]);
+    return s * h;
+}
+
+// Adaptive 1D Gauss-Legendre: halves until the two halves agree with the whole to tol.
+template <typename F>
+double adaptive_gl(const F& f, double a, double b, double whole, double tol, int depth = 0) {
+    double m = 0.5 * (a + b);
+    double l = gl4(f, a, m), r = gl4(f, m, b);
+    if (depth >= 14 || (depth >= 1 && std::fabs(l + r - whole) < tol)) return l + r;
+    return adaptive_gl(f, a, m, l, 0.5 * tol, depth + 1) + adaptive_gl(f, m, b, r, 0.5 * tol, depth + 1);
+}
+
+template <typename F>
+double integrate(const F& f, double a, double b, double tol) {
+    return a < b ? adaptive_gl(f, a, b, gl4(f, a, b), tol) : 0.0;
+}
+
 using DirPdf = std::function<double(D3)>;
 
-double rect_rule(const Binning& b, const DirPdf& pdf, double t0, double t1, double p0, double p1) {
-    double sum = 0;
-    double tm = 0.5 * (t0 + t1), th = 0.5 * (t1 - t0), pm = 0.5 * (p0 + p1), ph = 0.5 * (p1 - p0);
-    for (int i = 0; i < 4; ++i) {
-        double t = tm + th * kGlX[i];
-        double st = std::sin(t);
-        for (int j = 0; j < 4; ++j) sum += kGlW[i] * kGlW[j] * pdf(b.dir(t, pm + ph * kGlX[j])) * st;
-    }
-    return sum * th * ph;
-}
-
-double adaptive(const Binning& b, const DirPdf& pdf, double t0, double t1, double p0, double p1, double whole,
-                double tol, int depth) {
-    double tm = 0.5 * (t0 + t1), pm = 0.5 * (p0 + p1);
-    double q[4] = {rect_rule(b, pdf, t0, tm, p0, pm), rect_rule(b, pdf, tm, t1, p0, pm),
-                   rect_rule(b, pdf, t0, tm, pm, p1), rect_rule(b, pdf, tm, t1, pm, p1)};
-    double sum = q[0] + q[1] + q[2] + q[3];
-    if (depth >= 12 || (depth >= 2 && std::fabs(sum - whole) < tol)) return sum;
-    return adaptive(b, pdf, t0, tm, p0, pm, q[0], tol / 4, depth + 1) +
-           adaptive(b, pdf, tm, t1, p0, pm, q[1], tol / 4, depth + 1) +
-           adaptive(b, pdf, t0, tm, pm, p1, q[2], tol / 4, depth + 1) +
-           adaptive(b, pdf, tm, t1, pm, p1, q[3], tol / 4, depth + 1);
-}
-
-// Probability of every cell under `pdf` (a solid-angle density over the sphere).
-std::vector<double> cell_probabilities(const Binning& b, const DirPdf& pdf, double tol) {
+// Probability of every cell under `pdf`, a solid-angle density supported on the hemisphere
+// {w : dot(w, up) > 0}.
+std::vector<double> cell_probabilities(const Binning& b, const DirPdf& pdf, D3 up, double tol) {
+    // dot(dir(theta, phi), up) = A cos(theta) + B sin(theta) cos(phi - phi0).
+    D3 l = b.frame.to_local(up);
+    double A = l.z, B = std::hypot(l.x, l.y), phi0 = std::atan2(l.y, l.x);
     std::vector<double> p(kRings * kSectors);
     for (int r = 0; r < kRings; ++r)
         for (int s = 0; s < kSectors; ++s) {
             double t0 = ring_edge(r), t1 = ring_edge(r + 1);
             double p0 = 2 * kPi * s / kSectors, p1 = 2 * kPi * (s + 1) / kSectors;
-            p[r * kSectors + s] = adaptive(b, pdf, t0, t1, p0, p1, rect_rule(b, pdf, t0, t1, p0, p1), tol, 0);
+            auto ring = [&](double theta) {
+                auto f = [&](double phi) { return pdf(b.dir(theta, phi)); };
+                double bs = B * std::sin(theta), ac = A * std::cos(theta);
+                double sum = 0;
+                if (bs <= std::fabs(ac) * 1e-15) return ac > 0 ? integrate(f, p0, p1, tol) : 0.0;
+                double x = -ac / bs;  // above the horizon where cos(phi - phi0) > x
+                if (x <= -1) return integrate(f, p0, p1, tol);
+                if (x >= 1) return 0.0;
+                double half = std::acos(x);
+                for (int k = -1; k <= 1; ++k) {
+                    double lo = std::max(p0, phi0 + 2 * kPi * k - half), hi = std::min(p1, phi0 + 2 * kPi * k + half);
+                    sum += integrate(f, lo, hi, tol);
+                }
+                return sum;
+            };
+            p[r * kSectors + s] = integrate([&](double t) { return ring(t) * std::sin(t); }, t0, t1, tol);
         }
     return p;
 }
@@ -242,11 +258,14 @@ D3 reflect(D3 wo, D3 n) { return 2 * dot(wo, n) * n - wo; }
 // ---- Tests -----------------------------------------------------------------------------------
 
 // bsdf_sample stores bsdf_pdf's and bsdf_f's own values (bsdf.h), so they must agree to float
-// rounding: 1e-4 relative. Against the double-precision reference the device's float GGX loses
-// up to ~1/alpha^2 ulps in 1 - cos^2(theta_h) near the peak (400 ulps ~ 2.4e-5 at alpha 0.05),
-// and a few ulps more in the shading frame and the normalisations: 2e-4 relative.
+// rounding: 1e-4 relative. Against the double-precision reference, float GGX loses accuracy in
+// 1 - cos^2(theta_h): a few ulps of 1 (~5e-7 absolute, through normalize(wo + wi)) divided by
+// alpha^2 in D's denominator and doubled by its square, 1e-6/alpha^2 relative (4e-4 at alpha
+// 0.05; measured 2.0e-4); 1e-4 on top for the other float operations.
+double reference_tolerance(const Material& m) {
+    return m.kind == MATERIAL_GLOSSY ? 1e-4 + 1e-6 / (double(m.alpha) * m.alpha) : 1e-4;
+}
 constexpr double kSelfTolerance = 1e-4;
-constexpr double kReferenceTolerance = 2e-4;
 
 TEST(Bsdf, SampleAgreesWithPdfAndF) {
     const size_t n = 1 << 14;
@@ -279,7 +298,7 @@ TEST(Bsdf, SampleAgreesWithPdfAndF) {
                                    std::to_string(mode);
                 EXPECT_GT(ok, n / 2) << what;
                 EXPECT_LE(worst_self, kSelfTolerance) << what;
-                EXPECT_LE(worst_ref, kReferenceTolerance) << what;
+                EXPECT_LE(worst_ref, reference_tolerance(lobe.material)) << what;
             }
 }
 
@@ -323,34 +342,35 @@ TEST(Bsdf, EvaluationMatchesReference) {
         for (size_t i = 0; i < n; ++i) {
             double pdf = delta ? 0 : lobe.ref.pdf(wo_d[i], wi_d[i]);
             D3 f = delta ? D3() : lobe.ref.f(wo_d[i], wi_d[i]);
-            ASSERT_LE(rel_diff(r[i].s[0], pdf, 1e-6), kReferenceTolerance) << lobe.name << " pair " << i;
-            ASSERT_LE(rel_diff(r[i].s[1], f.x, 1e-6), kReferenceTolerance) << lobe.name << " pair " << i;
-            ASSERT_LE(rel_diff(r[i].s[3], f.z, 1e-6), kReferenceTolerance) << lobe.name << " pair " << i;
+            ASSERT_LE(rel_diff(r[i].s[0], pdf, 1e-6), reference_tolerance(lobe.material)) << lobe.name << " pair " << i;
+            ASSERT_LE(rel_diff(r[i].s[1], f.x, 1e-6), reference_tolerance(lobe.material)) << lobe.name << " pair " << i;
+            ASSERT_LE(rel_diff(r[i].s[3], f.z, 1e-6), reference_tolerance(lobe.material)) << lobe.name << " pair " << i;
         }
     }
 }
 
 // Chi-square goodness of fit of the sampled directions against the reference pdf, which the
-// test above ties to bsdf_pdf. 2^19 samples per case; significance kChiSquareSignificance.
+// test above ties to bsdf_pdf. 2^19 samples per case (the mode does not change non-delta
+// sampling, so both modes are tested against one integration); significance
+// kChiSquareSignificance.
 TEST(Bsdf, SampledDirectionsFollowPdf) {
     const size_t n = 1 << 19;
     uint32_t seed = 1000;
     for (const Lobe& lobe : non_delta_lobes())
-        for (double theta : kWoThetaDegrees)
+        for (double theta : kWoThetaDegrees) {
+            D3 wo = direction_at(kNormal, theta * kPi / 180, 2.1);
+            D3 wo_f = as_float(wo);
+            D3 up = dot(wo_f, lobe.ref.n) > 0 ? lobe.ref.n : -lobe.ref.n;
+            Binning bins(reflect(wo_f, lobe.ref.n));
+            DirPdf pdf = [&](D3 w) { return lobe.ref.pdf(wo_f, w); };
+            // Absolute tolerance 1e-9 of probability per integral: < 1e-3 expected samples.
+            std::vector<double> p = cell_probabilities(bins, pdf, up, 1e-9);
+            double total = 0;
+            for (double x : p) total += x;
             for (int mode : {kRadiance, kImportance}) {
-                D3 wo = direction_at(kNormal, theta * kPi / 180, 2.1);
-                D3 wo_f = as_float(wo);
                 std::vector<Sample> s = sample_bsdf(lobe.material, kNormal, wo, mode, n, ++seed);
-                Binning bins(reflect(wo_f, lobe.ref.n));
-                DirPdf pdf = [&](D3 w) { return lobe.ref.pdf(wo_f, w); };
-                // Absolute tolerance per cell 1e-9 of probability: 5e-4 expected samples.
-                std::vector<double> p = cell_probabilities(bins, pdf, 1e-9);
                 std::vector<double> observed(p.size() + 1, 0.0), expected(p.size() + 1, 0.0);
-                double total = 0;
-                for (size_t c = 0; c < p.size(); ++c) {
-                    expected[c] = p[c] * double(n);
-                    total += p[c];
-                }
+                for (size_t c = 0; c < p.size(); ++c) expected[c] = p[c] * double(n);
                 // The last cell: samples that failed (a glossy half vector reflecting wi below
                 // the horizon), expected (1 - integral of the pdf) of them.
                 expected[p.size()] = std::max(0.0, 1 - total) * double(n);
@@ -361,8 +381,9 @@ TEST(Bsdf, SampledDirectionsFollowPdf) {
                 EXPECT_GT(chi.p_value, kChiSquareSignificance)
                     << what << ": chi2 " << chi.statistic << " dof " << chi.dof << ", worst " << chi.worst
                     << ", integral of pdf " << total << ", failed " << observed[p.size()];
-                EXPECT_LE(total, 1 + 1e-6) << what << ": the pdf integrates to more than 1";
             }
+            EXPECT_LE(total, 1 + 1e-6) << lobe.name << ": the pdf integrates to more than 1";
+        }
 }
 
 // Mirror: wi is wo reflected about the shading normal, pdf 1 (the lobe's discrete probability),

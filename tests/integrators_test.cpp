@@ -57,6 +57,30 @@ TEST(Integrators, AgreeOnCornellBox) {
     expect_agree(bdpt, sobol, "bdpt vs bdpt with the Sobol sampler");
 }
 
+// A thin-lens camera: t = 1 strategies sample lens points (camera_sample_wi), camera subpaths
+// start from them, and the importance includes 1 / lens area.
+TEST(Integrators, AgreeWithThinLens) {
+    Scene loaded = load_scene(scene_path("cornell-box"));
+    loaded.camera.lens_radius = 25.0f;
+    loaded.camera.focus_distance = 700.0f;
+    DeviceScene scene = build_device_scene(loaded, 40, 40);
+    RenderOptions options;
+    options.max_depth = 4;
+    const int passes = 96;
+    options.integrator = Integrator::Bdpt;
+    options.seed = 11;
+    RegionStats bdpt = render_region_stats(scene, options, passes, 4);
+    options.integrator = Integrator::Pt;
+    options.seed = 12;
+    RegionStats pt = render_region_stats(scene, options, passes, 4);
+    options.integrator = Integrator::Lt;
+    options.seed = 13;
+    RegionStats lt = render_region_stats(scene, options, passes, 4);
+    ASSERT_GT(bdpt.image_mean, 0.01);
+    expect_agree(bdpt, pt, "thin lens: bdpt vs pt");
+    expect_agree(bdpt, lt, "thin lens: bdpt vs lt");
+}
+
 class BatchingTest : public ::testing::TestWithParam<SamplerKind> {};
 
 TEST_P(BatchingTest, ImageDoesNotDependOnBatching) {

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <memory>
 #include <numeric>
 #include <random>
 #include <string>
@@ -175,6 +176,36 @@ inline EnvironmentMap synthetic_environment(int width, int height) {
         }
     return map;
 }
+
+// A device scene with its buffers on the test device and the kernel flags its features need.
+// Not movable: SceneBuffers keeps a reference to `ds`.
+struct TestScene {
+    DeviceScene ds;
+    std::vector<std::string> defines;
+    std::unique_ptr<SceneBuffers> buffers;
+
+    TestScene(const Scene& scene, int width, int height, Integrator integrator = Integrator::Bdpt,
+              int max_depth = 5)
+        : ds(build_device_scene(scene, width, height)) {
+        defines = kernel_defines(ds, integrator, max_depth);
+        buffers = std::make_unique<SceneBuffers>(test_device().context(), ds);
+    }
+    explicit TestScene(DeviceScene device_scene, std::vector<std::string> flags)
+        : ds(std::move(device_scene)), defines(std::move(flags)) {
+        buffers = std::make_unique<SceneBuffers>(test_device().context(), ds);
+    }
+    TestScene(const TestScene&) = delete;
+    TestScene& operator=(const TestScene&) = delete;
+
+    // A kernel from `file` with the scene's arguments set (0 .. kSceneArgCount - 1).
+    cl::Kernel kernel(const std::string& file, const char* name, const std::vector<std::string>& extra = {}) const {
+        std::vector<std::string> d = defines;
+        d.insert(d.end(), extra.begin(), extra.end());
+        cl::Kernel k = test_kernel(file, d, name);
+        buffers->set_args(k);
+        return k;
+    }
+};
 
 // ---- Statistics -----------------------------------------------------------------------------
 

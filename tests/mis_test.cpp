@@ -16,8 +16,7 @@ struct MisSums {
     long paths = 0;    // paths checked
 };
 
-MisSums mis_sums(const std::string& name, Integrator integrator, int max_depth, int size, int passes) {
-    Scene scene = load_scene(scene_path(name));
+MisSums mis_sums(const Scene& scene, Integrator integrator, int max_depth, int size, int passes) {
     DeviceScene ds = build_device_scene(scene, size, size);
     DeviceContext& device = test_device();
     const ProgramBuild& build = device.program("kernels/mis_test.cl", kernel_defines(ds, integrator, max_depth));
@@ -53,17 +52,28 @@ constexpr float kTolerance = 1e-4f;
 
 // min_paths: how many emitter-ending paths the 64x64x4 camera samples must find for the test
 // to mean something (the lamp's emitter hides in its shade, so few camera paths reach it).
-void check_scene(const std::string& name, int max_depth, long min_paths = 100) {
-    if (!std::filesystem::exists(scene_path(name))) GTEST_SKIP() << name << " is not bundled";
+void check_scene(const Scene& scene, const std::string& name, int max_depth, long min_paths = 100) {
     for (Integrator integrator : {Integrator::Bdpt, Integrator::Pt, Integrator::Lt}) {
-        MisSums sums = mis_sums(name, integrator, max_depth, 64, 4);
+        MisSums sums = mis_sums(scene, integrator, max_depth, 64, 4);
         EXPECT_GE(sums.paths, min_paths) << name << " " << integrator_name(integrator);
         EXPECT_LT(sums.worst, kTolerance) << name << " " << integrator_name(integrator) << ": " << sums.paths
                                           << " paths";
     }
 }
 
+void check_scene(const std::string& name, int max_depth, long min_paths = 100) {
+    if (!std::filesystem::exists(scene_path(name))) GTEST_SKIP() << name << " is not bundled";
+    check_scene(load_scene(scene_path(name)), name, max_depth, min_paths);
+}
+
 TEST(MisWeights, SumToOneCornellBox) { check_scene("cornell-box", 5); }
+
+TEST(MisWeights, SumToOneThinLens) {
+    Scene scene = load_scene(scene_path("cornell-box"));
+    scene.camera.lens_radius = 25.0f;
+    scene.camera.focus_distance = 700.0f;
+    check_scene(scene, "cornell-box with a thin lens", 5);
+}
 TEST(MisWeights, SumToOneCornellSpecular) { check_scene("cornell-specular", 8); }
 TEST(MisWeights, SumToOneVeachMis) { check_scene("veach-mis", 5); }
 TEST(MisWeights, SumToOneSky) { check_scene("sky", 5); }

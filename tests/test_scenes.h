@@ -185,6 +185,48 @@ struct SceneBuilder {
     }
 };
 
+// A closed Cornell-like room built in code: [-1,1] x [0,2] x [-1,1], red -x wall, green +x
+// wall, white elsewhere, a white block on the floor, and a square ceiling light of side
+// `light_side` just below the ceiling, facing down, whose radiance is scaled by
+// (0.5 / light_side)^2 so its power does not depend on its size. The camera looks down at the
+// floor and never sees the ceiling (the light is not in view, so a light too small for a
+// camera ray to hit is not a difference between strategies that can and cannot see it).
+struct RoomMaterials {
+    int white, red, green, light;
+};
+
+inline RoomMaterials room_materials(SceneBuilder& b, float light_radiance = 12.0f, float light_side = 0.5f) {
+    RoomMaterials m;
+    m.white = b.material(diffuse_material({0.73f, 0.73f, 0.73f}), "white");
+    m.red = b.material(diffuse_material({0.63f, 0.065f, 0.05f}), "red");
+    m.green = b.material(diffuse_material({0.14f, 0.45f, 0.091f}), "green");
+    const float scale = (0.5f / light_side) * (0.5f / light_side);
+    m.light = b.material(diffuse_material({0, 0, 0}, Vec3{1.0f, 0.85f, 0.6f} * (light_radiance * scale)), "light");
+    return m;
+}
+
+inline void room_walls(SceneBuilder& b, const RoomMaterials& m, bool with_block = true) {
+    b.box({-1, 0, -1}, {1, 2, 1}, /*inward=*/true, {m.red, m.green, m.white, m.white, m.white, m.white});
+    if (with_block) b.box({-0.55f, 0, -0.1f}, {0.0f, 0.6f, 0.45f}, /*inward=*/false, m.white);
+}
+
+// A horizontal square emitter facing down (counter-clockwise seen from below), centred at c.
+inline void ceiling_light(SceneBuilder& b, Vec3 c, float side, int material) {
+    const float h = 0.5f * side;
+    b.quad({c.x - h, c.y, c.z - h}, {c.x + h, c.y, c.z - h}, {c.x + h, c.y, c.z + h}, {c.x - h, c.y, c.z + h}, material);
+}
+
+inline void room_camera(SceneBuilder& b) { b.camera({0, 1, -0.95f}, {0, 0.6f, 1}, 60.0f); }
+
+inline Scene room_scene(float light_side) {
+    SceneBuilder b;
+    RoomMaterials m = room_materials(b, 12.0f, light_side);
+    room_walls(b, m);
+    ceiling_light(b, {0, 1.999f, 0.2f}, light_side, m.light);
+    room_camera(b);
+    return b.scene;
+}
+
 // Every length in the scene times s: vertices, camera, light positions, bounds. Radiance and
 // reflectance do not change, so the image must not either (point and spot intensities would
 // need s^2 to keep irradiance; the scenes scaled here have none).

@@ -26,7 +26,7 @@ struct RenderOptions {
     uint32_t seed = 0;
     bool all_features = false;  // build the unspecialised kernel
     int batch_items = 0;        // work items per launch; 0 = automatic
-    int local_size = 0;         // work-group size; 0 = the driver's choice
+    int local_size = 0;         // work-group size; 0 = automatic (small on CPUs, the driver's choice elsewhere)
     enum class StrategyImages { Off, Weighted, Unweighted };
     StrategyImages strategy_images = StrategyImages::Off;  // also record each (s, t) apart
     // Called now and then from the rendering thread: passes done, passes planned (0 if
@@ -101,6 +101,7 @@ private:
     std::unique_ptr<SceneBuffers> scene_buffers_;
     cl::Buffer camera_out_, splats_, strategy_out_;
     int batch_items_ = 0;
+    int local_size_ = 0;  // 0 = the driver's choice
     int splat_slots_ = 0;
     std::vector<cl_float4> camera_host_;
     std::vector<SplatRecord> splats_host_;

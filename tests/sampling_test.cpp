@@ -1,0 +1,169 @@
+// cl/sampling.h through cl/kernels/sampling_test.cl: each warp puts its points where its density
+// says (chi-square over cells of equal probability under the claimed density, 2^18 samples,
+// significance kChiSquareSignificance), stays inside its domain, and reports that density; and
+// find_interval returns the interval holding u, never one of zero width.
+#include <gtest/gtest.h>
+
+#include "kernel_test_util.h"
+
+namespace clbdpt::test {
+namespace {
+
+enum Warp { kDisk = 0, kCosineHemisphere = 1, kSphere = 2, kCone = 3, kTriangle = 4 };
+
+std::vector<cl_float4> warp(Warp w, float cos_max, size_t n, uint32_t seed) {
+    cl::Kernel k = test_kernel("kernels/sampling_test.cl", {}, "warp_test");
+    cl::Buffer out = output_buffer<cl_float4>(n);
+    k.setArg(0, cl_int(w));
+    k.setArg(1, cos_max);
+    k.setArg(2, cl_uint(seed));
+    k.setArg(3, out);
+    launch(k, n);
+    return download<cl_float4>(out, n);
+}
+
+constexpr size_t kSamples = 1 << 18;
+constexpr int kRadial = 10, kAngular = 20;
+
+// Cells (a, phi) with a in [0, 1) the radial coordinate in which the density is uniform.
+int cell(double a, double x, double y) {
+    double phi = std::atan2(y, x);
+    if (phi < 0) phi += 2 * kPi;
+    int i = std::clamp(int(a * kRadial), 0, kRadial - 1);
+    int j = std::clamp(int(phi / (2 * kPi) * kAngular), 0, kAngular - 1);
+    return i * kAngular + j;
+}
+
+void expect_uniform(const std::vector<double>& observed, const char* what) {
+    std::vector<double> expected(observed.size(), double(kSamples) / double(observed.size()));
+    ChiSquare chi = chi_square(observed, expected);
+    EXPECT_GT(chi.p_value, kChiSquareSignificance) << what << ": chi2 " << chi.statistic << " dof " << chi.dof
+                                                   << ", worst " << chi.worst;
+}
+
+// Concentric disk: area-preserving, so r^2 and phi are uniform.
+TEST(Sampling, ConcentricDiskIsUniform) {
+    std::vector<cl_float4> s = warp(kDisk, 0, kSamples, 1);
+    std::vector<double> obs(kRadial * kAngular, 0.0);
+    for (const cl_float4& p : s) {
+        double r2 = double(p.s[0]) * p.s[0] + double(p.s[1]) * p.s[1];
+        ASSERT_LE(r2, 1 + 1e-6);
+        obs[cell(r2, p.s[0], p.s[1])] += 1;
+    }
+    expect_uniform(obs, "concentric disk");
+}
+
+// Cosine hemisphere: density cos(theta)/pi, so P(cos theta < c) = c^2: cos^2 and phi uniform.
+TEST(Sampling, CosineHemisphereFollowsCosine) {
+    std::vector<cl_float4> s = warp(kCosineHemisphere, 0, kSamples, 2);
+    std::vector<double> obs(kRadial * kAngular, 0.0);
+    for (const cl_float4& p : s) {
+        D3 w = d3(p);
+        ASSERT_NEAR(length(w), 1.0, 1e-5);
+        ASSERT_GE(w.z, 0.0);
+        // Density as reported, to float rounding.
+        ASSERT_LE(rel_diff(p.s[3], w.z / kPi, 1e-7), 1e-5);
+        obs[cell(w.z * w.z, w.x, w.y)] += 1;
+    }
+    expect_uniform(obs, "cosine hemisphere");
+}
+
+TEST(Sampling, UniformSphereIsUniform) {
+    std::vector<cl_float4> s = warp(kSphere, 0, kSamples, 3);
+    std::vector<double> obs(kRadial * kAngular, 0.0);
+    for (const cl_float4& p : s) {
+        D3 w = d3(p);
+        ASSERT_NEAR(length(w), 1.0, 1e-5);
+        ASSERT_LE(rel_diff(p.s[3], 1 / (4 * kPi)), 1e-6);
+        obs[cell(0.5 * (1 - w.z), w.x, w.y)] += 1;
+    }
+    expect_uniform(obs, "uniform sphere");
+}
+
+// Uniform cone: cos theta uniform in [cos_max, 1], density 1 / (2 pi (1 - cos_max)).
+TEST(Sampling, UniformConeIsUniformInsideTheCone) {
+    for (double degrees : {2.0, 25.0, 90.0, 150.0}) {
+        float cos_max = float(std::cos(degrees * kPi / 180));
+        std::vector<cl_float4> s = warp(kCone, cos_max, kSamples, 4 + uint32_t(degrees));
+        std::vector<double> obs(kRadial * kAngular, 0.0);
+        for (const cl_float4& p : s) {
+            D3 w = d3(p);
+            ASSERT_NEAR(length(w), 1.0, 1e-5);
+            // Inside the cone, up to the float rounding of cos theta.
+            ASSERT_GE(w.z, double(cos_max) - 1e-6) << degrees;
+            ASSERT_LE(rel_diff(p.s[3], 1 / (2 * kPi * (1 - double(cos_max)))), 1e-5) << degrees;
+            obs[cell((1 - w.z) / (1 - double(cos_max)), w.x, w.y)] += 1;
+        }
+        std::string what = "cone " + std::to_string(degrees);
+        expect_uniform(obs, what.c_str());
+    }
+}
+
+// Uniform triangle: (b0, b1) uniform over {b0, b1 >= 0, b0 + b1 <= 1}. A 16 x 16 grid over
+// the unit square: cells below the diagonal hold 2/256 of the mass, cells the diagonal
+// halves 1/256, cells above it none.
+TEST(Sampling, UniformTriangleIsUniform) {
+    const int g = 16;
+    std::vector<cl_float4> s = warp(kTriangle, 0, kSamples, 5);
+    std::vector<double> obs(g * g, 0.0), expected(g * g, 0.0);
+    for (int i = 0; i < g; ++i)
+        for (int j = 0; j < g; ++j)
+            expected[i * g + j] = double(kSamples) * (i + j < g - 1 ? 2.0 : (i + j == g - 1 ? 1.0 : 0.0)) / (g * g);
+    for (const cl_float4& p : s) {
+        double b0 = p.s[0], b1 = p.s[1];
+        ASSERT_GE(b0, 0.0);
+        ASSERT_GE(b1, 0.0);
+        ASSERT_LE(b0 + b1, 1 + 1e-6);
+        int i = std::clamp(int(b0 * g), 0, g - 1), j = std::clamp(int(b1 * g), 0, g - 1);
+        // A point on the diagonal rounded into a cell above it counts for the cell it came from.
+        if (i + j > g - 1) (i > j ? i : j) -= 1;
+        obs[i * g + j] += 1;
+    }
+    ChiSquare chi = chi_square(obs, expected);
+    EXPECT_GT(chi.p_value, kChiSquareSignificance) << "chi2 " << chi.statistic << ", worst " << chi.worst;
+}
+
+// find_interval on a CDF with zero-width intervals (zero weights), at every CDF value, just
+// below and above it, and on a fine grid: cdf[i] <= u < cdf[i + 1], so a zero-width interval
+// is never returned.
+TEST(Sampling, FindIntervalNeverReturnsEmptyIntervals) {
+    std::vector<float> weights = {0, 1, 0, 0, 3, 2, 0, 0.5f, 0, 4, 0};
+    std::vector<float> cdf(weights.size() + 1, 0.0f);
+    double total = 0;
+    for (float w : weights) total += w;
+    double run = 0;
+    for (size_t i = 0; i < weights.size(); ++i) {
+        run += weights[i];
+        cdf[i + 1] = float(run / total);
+    }
+    cdf.back() = 1.0f;
+    std::vector<float> u;
+    for (float c : cdf) {
+        if (c < 1) u.push_back(c);
+        u.push_back(std::nextafter(c, 0.0f));
+        if (c < 1) u.push_back(std::nextafter(c, 1.0f));
+    }
+    for (int i = 0; i < 1000; ++i) u.push_back(float(i) / 1000.0f);
+    u.push_back(std::nextafter(1.0f, 0.0f));
+    cl::Kernel k = test_kernel("kernels/sampling_test.cl", {}, "find_interval_test");
+    cl::Buffer cdf_buf = upload(cdf), u_buf = upload(u);
+    cl::Buffer out = output_buffer<cl_int>(u.size());
+    k.setArg(0, cdf_buf);
+    k.setArg(1, cl_int(weights.size()));
+    k.setArg(2, u_buf);
+    k.setArg(3, out);
+    launch(k, u.size());
+    std::vector<cl_int> idx = download<cl_int>(out, u.size());
+    for (size_t i = 0; i < u.size(); ++i) {
+        if (u[i] < 0) continue;
+        int j = idx[i];
+        ASSERT_GE(j, 0);
+        ASSERT_LT(j, int(weights.size()));
+        EXPECT_LE(cdf[j], u[i]) << "u " << u[i];
+        EXPECT_LT(u[i], cdf[j + 1]) << "u " << u[i];
+        EXPECT_GT(weights[j], 0) << "u " << u[i] << " gave the empty interval " << j;
+    }
+}
+
+}  // namespace
+}  // namespace clbdpt::test

@@ -1,0 +1,69 @@
+// bdpt, pt and lt estimate the same image of every bundled scene, region by region, within
+// stated standard errors. Each integrator's MIS runs over exactly its own strategies, so each is
+// unbiased on the paths it can reach; they are compared only where their reach is the same:
+//   - lt (t = 1 only) cannot reach paths whose camera side starts with a specular vertex
+//     (mirror, glass) nor an environment seen directly: no lt on cornell-specular and sky;
+//   - point and spot lights are invisible to every strategy set, so lt is fine on point-spot.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "test_scenes.h"
+
+namespace clbdpt::test {
+namespace {
+
+// Tolerance: 16 regions + the image mean, up to 3 pairs, 5 scenes: about 250 comparisons. At
+// 4.5 standard errors a correct renderer fails one with probability ~250 * 6.8e-6 = 2e-3 under
+// a normal model; the seeds are fixed, so a pass stays a pass. The standard errors come from
+// the spread of independent one-sample-per-pixel passes over 12x12-pixel regions, so each
+// per-pass region value is itself a mean of 144 samples and close to normal.
+constexpr double kSigmas = 4.5;
+constexpr int kFilm = 40;
+constexpr int kBlocks = 4;
+// One depth for every scene, so scenes with the same features share compiled kernels (and
+// cornell-box-like scenes share them with integrators_test).
+constexpr int kMaxDepth = 5;
+
+struct AgreementCase {
+    const char* scene;
+    bool lt;     // whether lt reaches every path bdpt and pt do
+    int passes;  // per integrator at CLBDPT_TEST_SCALE = 1
+};
+
+class SceneAgreementTest : public ::testing::TestWithParam<AgreementCase> {};
+
+TEST_P(SceneAgreementTest, IntegratorsAgree) {
+    const AgreementCase c = GetParam();
+    const std::string path = scene_path(c.scene);
+    if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " does not exist";
+    Scene loaded = load_scene(path);
+    DeviceScene scene = build_device_scene(loaded, kFilm, kFilm);
+    const int passes = scaled_passes(c.passes);
+
+    RegionStats bdpt = render_stats_or_fail(scene, make_options(Integrator::Bdpt, kMaxDepth, 101), passes, kBlocks, "bdpt");
+    RegionStats pt = render_stats_or_fail(scene, make_options(Integrator::Pt, kMaxDepth, 202), passes, kBlocks, "pt");
+    ASSERT_GT(bdpt.image_mean, 0.0) << c.scene << " renders black";
+    expect_agree(bdpt, pt, kSigmas, "bdpt vs pt");
+    if (c.lt) {
+        RegionStats lt = render_stats_or_fail(scene, make_options(Integrator::Lt, kMaxDepth, 303), passes, kBlocks, "lt");
+        expect_agree(bdpt, lt, kSigmas, "bdpt vs lt");
+        expect_agree(pt, lt, kSigmas, "pt vs lt");
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(Bundled, SceneAgreementTest,
+                         ::testing::Values(AgreementCase{"cornell-specular", false, 96},
+                                           AgreementCase{"lamp-ceiling", true, 64},
+                                           AgreementCase{"veach-mis", true, 64},
+                                           AgreementCase{"point-spot", true, 64},
+                                           AgreementCase{"sky", false, 64}),
+                         [](const ::testing::TestParamInfo<AgreementCase>& info) {
+                             std::string n = info.param.scene;
+                             for (char& ch : n)
+                                 if (ch == '-') ch = '_';
+                             return n;
+                         });
+
+}  // namespace
+}  // namespace clbdpt::test
