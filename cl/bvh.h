@@ -193,16 +193,17 @@ __attribute__((always_inline)) inline bool bvh_hit_triangle(__global const float
 #endif
 
 /* Pushes entry c_ at distance d_ onto the stack, keeping the entries pushed for the current
- * node (from `base` on) sorted by distance, nearest on top. */
-#define BVH_PUSH_SORTED(c_, d_)                                                                   \
+ * node (from `base` on) sorted by distance, nearest on top. The distance of stack entry j is
+ * dist[j - dist_base]. */
+#define BVH_PUSH_SORTED(c_, d_, dist, dist_base)                                                  \
     do {                                                                                          \
         int j_ = sp++;                                                                            \
-        while (j_ > base && stack_t[j_ - 1] < (d_)) {                                             \
-            stack_t[j_] = stack_t[j_ - 1];                                                        \
+        while (j_ > base && dist[j_ - 1 - (dist_base)] < (d_)) {                                  \
+            dist[j_ - (dist_base)] = dist[j_ - 1 - (dist_base)];                                  \
             stack_node[j_] = stack_node[j_ - 1];                                                  \
             --j_;                                                                                 \
         }                                                                                         \
-        stack_t[j_] = (d_);                                                                       \
+        dist[j_ - (dist_base)] = (d_);                                                            \
         stack_node[j_] = (c_);                                                                    \
     } while (0)
 
@@ -210,7 +211,7 @@ __attribute__((always_inline)) inline bool bvh_hit_triangle(__global const float
 #define BVH_CLOSEST_LANE(lane)                                                                    \
     if (hit_mask.s##lane) {                                                                       \
         int c_ = node->child[lane];                                                               \
-        BVH_PUSH_SORTED(c_, t_near.s##lane);                                                      \
+        BVH_PUSH_SORTED(c_, t_near.s##lane, stack_t, 0);                                          \
         if (c_ >= 0) BVH_PREFETCH(nodes + c_, sizeof(BvhNode));                                   \
         else BVH_PREFETCH(tris + BVH_LEAF_FIRST(c_), sizeof(Triangle) * BVH_LEAF_COUNT(c_));      \
     }
@@ -223,7 +224,7 @@ __attribute__((always_inline)) inline bool bvh_hit_triangle(__global const float
         if (c_ < 0) {                                                                             \
             if (bvh_leaf_occluded(tris, c_, &r, tmax)) return true;                               \
         } else {                                                                                  \
-            BVH_PUSH_SORTED(c_, t_near.s##lane);                                                  \
+            BVH_PUSH_SORTED(c_, t_near.s##lane, node_t, base);                                    \
             BVH_PREFETCH(nodes + c_, sizeof(BvhNode));                                            \
         }                                                                                         \
     }
@@ -302,7 +303,6 @@ inline bool occluded(__global const BvhNode* nodes, __global const Triangle* tri
                      float tmax) {
     BvhRay r = bvh_ray(o, d);
     int stack_node[BVH_STACK_SIZE];
-    float stack_t[BVH_STACK_SIZE]; /* only orders the children of one node */
     int sp = 0;
     int current = 0;
     for (;;) {
@@ -310,6 +310,7 @@ inline bool occluded(__global const BvhNode* nodes, __global const Triangle* tri
         bvh_floatn t_near;
         bvh_intn hit_mask = bvh_hit_boxes(node, &r, tmax, &t_near);
         int base = sp;
+        float node_t[BVH_WIDTH]; /* distances of this node's pushed children, for their order */
         BVH_ALL_LANES(BVH_ANY_LANE)
         if (sp == 0) return false;
         current = stack_node[--sp];

@@ -491,8 +491,8 @@ void run_scene(const Scene& scene, const Options& opt, DeviceContext& ctx) {
     size_t n = tris.size();
     double bytes = double(bvh.nodes.size() * sizeof(BvhNode) + n * sizeof(Triangle));
     std::printf("\nscene %s: %zu triangles\n", scene.name.c_str(), n);
-    std::printf("  clbdpt BVH: build %.3f s, %zu nodes, %d leaves, depth %d, %.1f bytes/triangle\n",
-                bvh.build_seconds, bvh.nodes.size(), bvh.leaf_count, bvh.max_depth, bytes / double(n));
+    std::printf("  clbdpt BVH: build %.3f s, %zu nodes, %d leaves, depth %d, stack <= %d, %.1f bytes/triangle\n",
+                bvh.build_seconds, bvh.nodes.size(), bvh.leaf_count, bvh.max_depth, bvh.max_stack, bytes / double(n));
 
     ClTracer cl_tracer(ctx, bvh, tris, opt.local, opt.huge_pages);
 #ifdef CLBDPT_HAVE_EMBREE

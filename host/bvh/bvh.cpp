@@ -1,6 +1,7 @@
 // BVH build: a binary tree by binned SAH (Wald 2007, "On fast Construction of SAH-based Bounding
-// Volume Hierarchies"; pbrt-v3 BVHAccel::recursiveBuild, SplitMethod::SAH), collapsed to 4-wide
-// nodes (as Embree's BVH4) and flattened depth-first into BvhNode (cl/shared/types.h).
+// Volume Hierarchies"; pbrt-v3 BVHAccel::recursiveBuild, SplitMethod::SAH), collapsed to
+// BVH_WIDTH-wide nodes (as Embree's BVH4/BVH8 builders do) and flattened depth-first into BvhNode
+// (cl/shared/types.h).
 //
 // The build works on PrimRefs (a triangle's bounds and its index), partitioned in place, so a
 // node's triangles are always a contiguous range [first, first + count) of the ref array and the
@@ -32,10 +33,10 @@ namespace {
 
 // ---- Build constants -------------------------------------------------------------------------
 
-// SAH costs: a ray visiting an interior node (one step of the traversal: 4 slab tests, the
-// stack work and, mostly, the cache miss of fetching the node) against testing one triangle.
-// With the ratio 1 the traversal was as fast as with 2 or 4, and with leaves of up to 8
-// (traversal_bench, PoCL on 2 cores): the ray rates are bound by memory latency, not by this.
+// SAH costs of the binary build: a ray visiting an interior node (a slab test, the stack work
+// and, mostly, the cache miss of fetching the node) against testing one triangle. With the ratio
+// 1 the traversal was as fast as with 2 or 4, and with leaves of up to 8 (traversal_bench with
+// 4-wide nodes, PoCL on 2 cores): the ray rates are bound by memory latency, not by this.
 constexpr float kTraversalCost = 1.0f;
 constexpr float kIntersectionCost = 1.0f;
 
@@ -415,9 +416,9 @@ private:
     std::atomic<int> max_depth_{0};
 };
 
-// Collapses the binary tree into 4-wide nodes (as Embree's BVH4 builder: each wide node takes a
-// binary node's two children and repeatedly opens the child with the largest surface area) and
-// writes them depth-first.
+// Collapses the binary tree into BVH_WIDTH-wide nodes (as Embree's wide BVH builders: each wide
+// node takes a binary node's two children and repeatedly opens the child with the largest surface
+// area) and writes them depth-first.
 //
 // Stack bound: a traversal holds, on reaching a wide node, the entries its ancestors pushed
 // (`used`), and pushes up to k more for the node's k children. Opening a child is allowed only
@@ -560,7 +561,7 @@ Bvh build_bvh(const std::vector<Triangle>& triangles) {
     if (n >= (size_t(1) << (31 - BVH_LEAF_BITS)))
         throw Error("too many triangles for the BVH: " + std::to_string(n));
     if (n == 0) {
-        // A root with four empty slots: every ray misses it.
+        // A root whose slots are all empty: every ray misses it.
         Collapser collapser(nullptr, bvh.nodes);
         collapser.run(0);
         bvh.build_seconds = seconds_since(start);

@@ -1,5 +1,5 @@
-// Binned-SAH BVH over triangles, collapsed to 4-wide nodes and flattened depth-first into
-// BvhNode (cl/shared/types.h).
+// Binned-SAH BVH over triangles, collapsed to BVH_WIDTH-wide nodes and flattened depth-first
+// into BvhNode (cl/shared/types.h); traversed by cl/bvh.h.
 #pragma once
 
 #include <cstdint>
@@ -14,7 +14,7 @@ struct Bvh {
     std::vector<uint32_t> order;  // order[i] = index (before reordering) of the i-th triangle
     double build_seconds = 0;
     int max_depth = 0;   // wide nodes on the longest root-to-leaf path
-    int leaf_count = 0;
+    int leaf_count = 0;  // non-empty leaves
     int max_stack = 0;   // most traversal stack entries any ray can need (<= BVH_STACK_SIZE)
 };
 
