@@ -330,8 +330,9 @@ inline void light_pdf_le(const SceneData* scene, int index, float3 n, float3 dir
     }
 }
 
-/* Pdf_Li for lights that can be found by direction alone (environment); area lights need the
- * hit point, see light_pdf_li_area. Delta lights: 0 (they are never hit). */
+/* Pdf_Li of an area light for a point p (normal n) on it seen from ref: the solid-angle density
+ * light_sample_li gives that point. (The environment's is environment_pdf_w; delta lights are
+ * never hit.) */
 inline float light_pdf_li_area(__global const Light* light, float3 ref, float3 p, float3 n) {
     float3 d = p - ref;
     float d2 = length_squared(d);

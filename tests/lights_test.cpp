@@ -11,6 +11,10 @@
 //  - the environment map: sampled directions fall in texels with probability func / sum(func),
 //    environment_pdf_w integrates to 1 and matches a port of the distribution;
 //  - light selection follows select_pdf.
+// Tolerances not stated at a test: positions and unit vectors computed in float from values of
+// order 1 (or of the scene radius r) agree with the double reference to 1e-5 (absolute, or
+// relative to r): ~100 ulps; radiances copied from the light to 1e-6; chi-square tests at
+// kChiSquareSignificance, Monte Carlo means within kSigmas standard errors (kernel_test_util.h).
 #include <gtest/gtest.h>
 
 #include "kernel_test_util.h"
@@ -24,7 +28,7 @@ const D3 kAreaP0(-0.6, 1.9, -0.4), kAreaP1(0.7, 1.95, -0.3), kAreaP2(0.1, 2.1, 0
 const D3 kPointPos(0.3, 1.5, 0.2);
 const D3 kSpotPos(0, 3, 0), kSpotTarget(0.3, 0, 0.2);
 constexpr double kSpotCone = 30, kSpotDelta = 8;
-const D3 kDirectional = normalize(D3(0.3, -1, 0.2));
+const D3 kDirectionalDir = normalize(D3(0.3, -1, 0.2));
 
 Scene light_scene(bool env_map) {
     Scene s;
@@ -46,7 +50,7 @@ Scene light_scene(bool env_map) {
     spot.cone_delta = float(kSpotDelta);
     LightDesc dir;
     dir.kind = LightDesc::Kind::Directional;
-    dir.direction = v3(kDirectional);
+    dir.direction = v3(kDirectionalDir);
     dir.color = {1, 0.5f, 0.25f};
     LightDesc env;
     env.kind = LightDesc::Kind::Environment;
@@ -92,21 +96,20 @@ double spot_falloff(const Light& l, D3 w_from_light) {
     return d * d * d * d;
 }
 
-// The environment distribution recomputed from the map (README: lat-long, row 0 = +y,
-// u = phi / 2pi from +x toward +z), with the per-texel weight the host builds: mean of rgb
-// times sin(theta) at the row centre.
+// The environment light's sampling distribution: the per-texel weights `func` (row 0 = +y, u =
+// phi / 2pi from +x toward +z; README) as the host tabulated them (the first W*H entries of
+// env_distribution, whose weighting rule EnvironmentMapSamplingFollowsDocumentedLuminance
+// checks), with everything derived from them -- normalisation, texel lookup, the solid-angle
+// density func / (integral 2 pi^2 sin theta) -- recomputed here in double.
 struct EnvReference {
     int w = 0, h = 0;
     std::vector<double> func;
     double sum = 0;
     explicit EnvReference(const DeviceScene& ds) : w(ds.info.env_width), h(ds.info.env_height) {
-        for (int y = 0; y < h; ++y)
-            for (int x = 0; x < w; ++x) {
-                const cl_float4& t = ds.env_texels[size_t(y) * w + x];
-                double mean = (double(t.s[0]) + t.s[1] + t.s[2]) / 3;
-                func.push_back(mean * std::sin(kPi * (y + 0.5) / h));
-                sum += func.back();
-            }
+        for (int i = 0; i < w * h; ++i) {
+            func.push_back(ds.env_distribution[size_t(i)]);
+            sum += func.back();
+        }
     }
     static void uv(D3 d, double* u, double* v) {
         double phi = std::atan2(d.z, d.x);
@@ -190,8 +193,9 @@ std::vector<LeSample> sample_le(const TestScene& scene, int light, size_t count,
     return s;
 }
 
-// Points from which the lights are sampled: under the area light, beside it, far away.
-const std::vector<D3> kRefs = {{0.1, 0.5, 0.3}, {-1, 1, 1}, {1.5, 0.2, -1}, {0.05, 0.02, -0.1}};
+// Points from which the lights are sampled: under the area light, beside it, far away, and
+// above it (behind the one-sided emitter).
+const std::vector<D3> kRefs = {{0.1, 0.5, 0.3}, {-1, 1, 1}, {1.5, 0.2, -1}, {0.05, 0.02, -0.1}, {0.2, 2.6, 0.1}};
 
 // Densities computed twice by the same float formula agree to rounding; against the double
 // reference, ~10 float operations on values of order 1: 1e-4 relative (the brief's bound).
@@ -250,8 +254,11 @@ TEST(Lights, AreaSampleLi) {
             double expect = dot(d, d) / (std::fabs(dot(nrm, normalize(d))) * area_area());
             ASSERT_LE(rel_diff(x.pdf_w, x.pdf_eval), kPdfTolerance) << "light_pdf_li_area";
             ASSERT_LE(rel_diff(x.pdf_w, expect), kPdfTolerance);
-            if (front) ASSERT_LE(length(x.li - D3(4, 3, 2)), 1e-6);
-            else ASSERT_EQ(length(x.li), 0.0);
+            if (front) {
+                ASSERT_LE(length(x.li - D3(4, 3, 2)), 1e-6);
+            } else {
+                ASSERT_EQ(length(x.li), 0.0);
+            }
         }
         MeanEstimate omega = mean_estimate(n, [&](size_t i) { return 1 / s[i].pdf_w; });
         double exact = triangle_solid_angle(ref_f, kAreaP0, kAreaP1, kAreaP2);
@@ -300,10 +307,10 @@ TEST(Lights, DirectionalSampleLi) {
         std::vector<LiSample> s = sample_li(scene, kDirectional, ref, 16, 3);
         for (const LiSample& x : s) {
             EXPECT_TRUE(x.ok);
-            EXPECT_LT(length(x.wi + kDirectional), 1e-6);
+            EXPECT_LT(length(x.wi + kDirectionalDir), 1e-6);
             EXPECT_EQ(x.pdf_w, 1.0);
             EXPECT_LE(length(x.li - D3(1, 0.5, 0.25)), 1e-6);
-            EXPECT_LT(length(x.p - (as_float(ref) - kDirectional * (2 * r))), 1e-4 * r);
+            EXPECT_LT(length(x.p - (as_float(ref) - kDirectionalDir * (2 * r))), 1e-4 * r);
         }
     }
 }
@@ -352,6 +359,37 @@ TEST(Lights, EnvironmentMapSamplesFollowTheMapDistribution) {
     expect_fit(obs_le, expected, "environment Sample_Le texels");
 }
 
+// KNOWN FAILURE -- documentation and code disagree (reported; not fixed here, this test only
+// touches tests/): README ("Environment maps: ... Importance sampled by luminance x sin theta")
+// and cl/lights.h ("func [W*H] luminance * sin(theta) per texel, the density being sampled")
+// document the environment map's sampling distribution as Rec. 709 luminance times sin(theta),
+// but host/render/device_scene.cpp environment_distribution() weights each texel by mean_rgb
+// (the plain mean of r, g, b) times sin(theta). Sampling stays unbiased (environment_pdf_w reads
+// the same table; the tests above check sampler, table and pdf against each other), but it is
+// not the documented distribution: on this map with coloured texels a chi-square of the sampled
+// texels against luminance x sin(theta) rejects it (chi2 ~3000 for 511 dof, p ~ 0). If the code
+// is changed to luminance this passes as it stands; if the docs are changed to "mean of rgb"
+// instead, change `weight` below to match.
+TEST(Lights, EnvironmentMapSamplingFollowsDocumentedLuminance) {
+    const TestScene& scene = map_scene();
+    const DeviceScene& ds = scene.ds;
+    const int w = ds.info.env_width, h = ds.info.env_height;
+    std::vector<double> lum(size_t(w) * h);
+    double sum = 0;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const cl_float4& t = ds.env_texels[size_t(y) * w + x];
+            double weight = 0.2126 * t.s[0] + 0.7152 * t.s[1] + 0.0722 * t.s[2];
+            sum += lum[size_t(y) * w + x] = weight * std::sin(kPi * (y + 0.5) / h);
+        }
+    EnvReference env(ds);
+    const size_t n = 1 << 18;
+    std::vector<double> expected(lum.size()), observed(lum.size(), 0.0);
+    for (size_t i = 0; i < lum.size(); ++i) expected[i] = double(n) * lum[i] / sum;
+    for (const LiSample& x : sample_li(scene, kEnvironment, kRefs[1], n, 29)) observed[env.texel(x.wi)] += 1;
+    expect_fit(observed, expected, "environment texels against luminance x sin(theta) (README, cl/lights.h)");
+}
+
 // environment_pdf_w is a normalised density: at texel centres it is func/(integral 2 pi^2
 // sin theta), so sum over texels of pdf * sin(theta_c) * (pi/H) * (2 pi/W) = 1 exactly; float
 // rounding over 512 texels: 1e-4. Each value also matches the port (1e-4 relative), and
@@ -381,7 +419,8 @@ TEST(Lights, EnvironmentPdfIsNormalised) {
         integral += r[i].s[0] * st * (kPi / env.h) * (2 * kPi / env.w);
         EXPECT_LE(rel_diff(r[i].s[0], env.pdf_w(d[i])), kPdfTolerance) << "texel " << i;
         EXPECT_EQ(env.texel(d[i]), int(i));
-        EXPECT_LE(length(d3(r[i]) - 1.5 * d3(scene.ds.env_texels[i])), 1e-5 * length(d3(r[i])));
+        D3 radiance(r[i].s[1], r[i].s[2], r[i].s[3]);
+        EXPECT_LE(length(radiance - 1.5 * d3(scene.ds.env_texels[i])), 1e-5 * length(radiance));
     }
     EXPECT_NEAR(integral, 1.0, 1e-4);
 }
@@ -495,7 +534,9 @@ TEST(Lights, InfiniteLightsSampleLeFromTheBoundingDisk) {
         for (const LeSample& x : s) {
             ASSERT_TRUE(x.ok);
             D3 w_light = -x.dir;
-            if (light == kDirectional) ASSERT_LT(length(x.dir - kDirectional), 1e-6);
+            if (light == kDirectional) {
+                ASSERT_LT(length(x.dir - kDirectionalDir), 1e-6);
+            }
             D3 off = x.origin - centre;
             ASSERT_NEAR(dot(off, w_light), r, 1e-5 * r) << "origin not on the disk r from the centre";
             D3 lateral = off - dot(off, w_light) * w_light;
@@ -510,7 +551,9 @@ TEST(Lights, InfiniteLightsSampleLeFromTheBoundingDisk) {
             DFrame f(w_light);
             obs[polar_cell(dot(lateral, lateral) / (r * r), f.to_local(lateral))] += 1;
         }
-        if (light == kEnvironment) EXPECT_GT(compared, n * 9 / 10);
+        if (light == kEnvironment) {
+            EXPECT_GT(compared, n * 9 / 10);
+        }
         expect_uniform(obs, double(n), light == kDirectional ? "directional disk" : "environment disk");
     }
 }

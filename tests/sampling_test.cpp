@@ -2,6 +2,8 @@
 // says (chi-square over cells of equal probability under the claimed density, 2^18 samples,
 // significance kChiSquareSignificance), stays inside its domain, and reports that density; and
 // find_interval returns the interval holding u, never one of zero width.
+// Unit lengths and domain bounds hold to 1e-5 / 1e-6 (float sqrt, cos, sin of values of order 1:
+// a few ulps); densities equal the closed forms to 1e-5 relative (one or two float operations).
 #include <gtest/gtest.h>
 
 #include "kernel_test_util.h"
@@ -155,7 +157,6 @@ TEST(Sampling, FindIntervalNeverReturnsEmptyIntervals) {
     launch(k, u.size());
     std::vector<cl_int> idx = download<cl_int>(out, u.size());
     for (size_t i = 0; i < u.size(); ++i) {
-        if (u[i] < 0) continue;
         int j = idx[i];
         ASSERT_GE(j, 0);
         ASSERT_LT(j, int(weights.size()));

@@ -22,9 +22,6 @@ cl_float4 float4_of(Vec3 v, float w = 0.0f) {
 
 Vec3 vec3_of(const cl_float4& v) { return {v.s[0], v.s[1], v.s[2]}; }
 
-// Selection weight of a light: the mean over rgb of its emitted power (luminance would give
-// zero weight to a saturated blue light that still emits).
-float mean_rgb(Vec3 c) { return (c.x + c.y + c.z) / 3.0f; }
 
 bool is_emissive(const Material& m) { return m.ke.s[0] > 0 || m.ke.s[1] > 0 || m.ke.s[2] > 0; }
 
@@ -88,7 +85,7 @@ std::vector<float> environment_distribution(const EnvironmentMap& map) {
         std::vector<float> row(w);
         for (int x = 0; x < w; ++x) {
             const float* px = &map.rgb[(size_t(y) * w + x) * 3];
-            row[x] = func[size_t(y) * w + x] = mean_rgb({px[0], px[1], px[2]}) * sin_theta;
+            row[x] = func[size_t(y) * w + x] = luminance({px[0], px[1], px[2]}) * sin_theta;
         }
         row_integrals[y] = build_cdf(row, cond + size_t(y) * (w + 1)) / float(w);
     }
@@ -130,7 +127,7 @@ DeviceScene build_device_scene(const Scene& scene, int width, int height) {
         l.area = 0.5f * length(cross(e1, e2));
         info.light = int(ds.lights.size());
         ds.lights.push_back(l);
-        powers.push_back(mean_rgb(vec3_of(m.ke)) * l.area * kPi);
+        powers.push_back(luminance(vec3_of(m.ke)) * l.area * kPi);
     }
     for (const LightDesc& desc : scene.lights) {
         Light l{};
@@ -140,7 +137,7 @@ DeviceScene build_device_scene(const Scene& scene, int width, int height) {
             l.kind = LIGHT_POINT;
             l.position = float4_of(desc.position, 1.0f);
             l.emission = float4_of(desc.color);
-            power = 4.0f * kPi * mean_rgb(desc.color);
+            power = 4.0f * kPi * luminance(desc.color);
             break;
         case LightDesc::Kind::Spot: {
             l.kind = LIGHT_SPOT;
@@ -151,7 +148,7 @@ DeviceScene build_device_scene(const Scene& scene, int width, int height) {
             l.emission = float4_of(desc.color);
             l.cos_total_width = std::cos(desc.cone_angle * kPi / 180.0f);
             l.cos_falloff_start = std::cos((desc.cone_angle - desc.cone_delta) * kPi / 180.0f);
-            power = 2.0f * kPi * (1.0f - 0.5f * (l.cos_falloff_start + l.cos_total_width)) * mean_rgb(desc.color);
+            power = 2.0f * kPi * (1.0f - 0.5f * (l.cos_falloff_start + l.cos_total_width)) * luminance(desc.color);
             break;
         }
         case LightDesc::Kind::Directional:
@@ -159,19 +156,20 @@ DeviceScene build_device_scene(const Scene& scene, int width, int height) {
             if (!(length(desc.direction) > 0)) throw Error(scene.path + ": directional light has a zero 'direction'");
             l.direction = float4_of(normalize(desc.direction));
             l.emission = float4_of(desc.color);
-            power = kPi * radius * radius * mean_rgb(desc.color);
+            power = kPi * radius * radius * luminance(desc.color);
             break;
         case LightDesc::Kind::Environment: {
             l.kind = LIGHT_ENVIRONMENT;
             l.emission = float4_of(desc.color);
-            float mean = 1.0f;
+            float mean = 1.0f;  // mean luminance of the map
             if (scene.environment_map.width > 0) {
                 const EnvironmentMap& map = scene.environment_map;
                 double sum = 0;
-                for (float v : map.rgb) sum += v;
-                mean = float(sum / double(map.rgb.size()));
+                for (size_t i = 0; i + 2 < map.rgb.size(); i += 3)
+                    sum += luminance({map.rgb[i], map.rgb[i + 1], map.rgb[i + 2]});
+                mean = float(sum / double(map.rgb.size() / 3));
             }
-            power = kPi * radius * radius * mean_rgb(desc.color) * mean;
+            power = kPi * radius * radius * luminance(desc.color) * mean;
             ds.info.environment_light = int(ds.lights.size());
             break;
         }

@@ -1,0 +1,37 @@
+/* Test kernels for cl/sampling.h (tests/sampling_test.cpp): every warp on counter-based random
+ * numbers, and find_interval on a given CDF. */
+#include "rng.h"
+#include "sampling.h"
+
+#define WARP_CONCENTRIC_DISK 0
+#define WARP_COSINE_HEMISPHERE 1
+#define WARP_UNIFORM_SPHERE 2
+#define WARP_UNIFORM_CONE 3
+#define WARP_UNIFORM_TRIANGLE 4
+
+/* out[i] = (the warped point, its density where sampling.h has one, else 0). Disk and
+ * triangle: (x, y, 0, 0) and (b0, b1, 0, 0). */
+__kernel void warp_test(int warp, float cos_max, uint seed, __global float4* out) {
+    int gid = get_global_id(0);
+    Rng rng = rng_init((uint)gid, 0u, seed);
+    float2 u = rng_next2(&rng);
+    float4 r = (float4)(0.0f);
+    switch (warp) {
+    case WARP_CONCENTRIC_DISK: r.xy = sample_concentric_disk(u); break;
+    case WARP_COSINE_HEMISPHERE: {
+        float3 w = sample_cosine_hemisphere(u);
+        r = (float4)(w, cosine_hemisphere_pdf(w.z));
+        break;
+    }
+    case WARP_UNIFORM_SPHERE: r = (float4)(sample_uniform_sphere(u), INV_4PI_F); break;
+    case WARP_UNIFORM_CONE: r = (float4)(sample_uniform_cone(u, cos_max), uniform_cone_pdf(cos_max)); break;
+    case WARP_UNIFORM_TRIANGLE: r.xy = sample_uniform_triangle(u); break;
+    }
+    out[gid] = r;
+}
+
+/* out[i] = find_interval(cdf, n, u[i]). */
+__kernel void find_interval_test(__global const float* cdf, int n, __global const float* u, __global int* out) {
+    int gid = get_global_id(0);
+    out[gid] = find_interval(cdf, n, u[gid]);
+}

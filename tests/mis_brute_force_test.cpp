@@ -1,0 +1,665 @@
+// MIS weights against brute force (cl/mis.h through cl/kernels/mis_brute_force_test.cl).
+//
+// The host builds random complete paths x_0 .. x_{n-1} (x_0 on the lens of a pinhole or a
+// thin-lens camera, x_{n-1} on an area light, a point or spot light, a directional light or the
+// environment map; 0 to 5 scattering vertices in between, diffuse, glossy (alpha 0.3 and 0.05),
+// mirror and glass, some with shading normals). For every strategy (s, t), s + t = n, it
+// computes the path's density p_s in double precision straight from its definition -- the
+// product of the densities with which the strategy's camera subpath samples x_1 .. x_{t-1} and
+// its light subpath samples x_{n-1} .. x_t -- and the balance-heuristic weight
+//     w_s = p_s / sum of p_i over the strategies i that are enabled and can produce the path.
+// The kernel gets the two subpaths of each strategy with pdf_fwd / pdf_rev filled as
+// random_walk and generate_*_subpath fill them (the densities the connection changes hold junk,
+// so using a stale one fails the test), and its mis_weight, computed by the ratio recursion,
+// must match w_s. This checks the recursion, the four densities the connection replaces, the
+// remap0 and delta rules, the strategy sets of bdpt / pt / lt, and the density conventions of
+// every light and both cameras, independently of mis.h.
+//
+// Density conventions (pbrt-v3, Veach 10.2-10.3; the definitions the weights are balanced for):
+//  - area measure for every vertex on a surface or a point light; solid angle for a light at
+//    infinity (environment, directional) and for an environment vertex reached by an escaped
+//    camera ray; the first vertex a light at infinity emits toward gets the bounding-disk
+//    density 1/(pi r^2) times its |cos|;
+//  - the lens point's density is the same for every strategy (the camera samples it, by
+//    generate_ray or Sample_Wi, uniformly on the lens; a pinhole's delta likewise), so it
+//    cancels; so do a point/spot light's delta position and a directional light's delta
+//    direction, shared by every strategy that can produce such a path (s >= 1);
+//  - a vertex sampled through a specular (delta) vertex has density 1 in every strategy that
+//    samples it so (remap0: the delta and its geometric factors are dropped on both sides, as
+//    pbrt-v3 does); strategies whose connection touches a specular vertex cannot produce the
+//    path;
+//  - light selection: the light's select_pdf, for Sample_Le and Sample_Li alike.
+#include <gtest/gtest.h>
+
+#include "kernel_test_util.h"
+#include "kernels/mis_brute_force_test.cl"  // as C++: TestVertex and MisCase only
+
+namespace clbdpt::test {
+namespace {
+
+static_assert(sizeof(TestVertex) == 96, "TestVertex must match the device layout");
+static_assert(sizeof(MisCase) == 16, "MisCase must match the device layout");
+
+constexpr int kVertexCamera = 0, kVertexLight = 1, kVertexSurface = 2;  // VERTEX_* (cl/vertex.h)
+
+// ---- The scene ---------------------------------------------------------------------------------
+
+enum MaterialIndex { kDiffuse = 0, kGlossyRough, kGlossySharp, kMirror, kGlass, kEmitBig, kEmitSmall, kMaterials };
+
+const D3 kBig0(-0.8, 2.0, -0.6), kBig1(0.9, 2.0, -0.5), kBig2(0.1, 2.0, 0.9);  // faces down
+const D3 kSmall0(1.6, 0.8, 0.3), kSmall1(1.7, 1.3, 0.1), kSmall2(1.5, 1.0, -0.3);
+const D3 kPointPos(-0.9, 1.6, 0.4), kSpotPos(0.8, 2.2, -0.2), kSpotTarget(0.2, 0, 0.3);
+const D3 kDirectionalDir = normalize(D3(0.3, -1, 0.25));
+
+CameraDesc camera_desc(bool thin) {
+    CameraDesc d;
+    d.eye = {0, 0.6f, -4.5f};
+    d.target = {0.1f, 0.8f, 0};
+    d.up = {0, 1, 0};
+    d.fov_degrees = 55;
+    d.lens_radius = thin ? 0.15f : 0.0f;
+    d.focus_distance = 4.5f;
+    return d;
+}
+constexpr int kWidth = 64, kHeight = 48;
+
+Scene mis_scene() {
+    Scene s;
+    s.path = "mis_brute_force_test";
+    add_material(s, make_material(MATERIAL_DIFFUSE, {0.6, 0.5, 0.4}));
+    add_material(s, make_material(MATERIAL_GLOSSY, {0.3, 0.3, 0.2}, {0.4, 0.5, 0.5}, {}, 0.3f));
+    add_material(s, make_material(MATERIAL_GLOSSY, {0.1, 0.1, 0.1}, {0.8, 0.7, 0.8}, {}, 0.05f));
+    add_material(s, make_material(MATERIAL_MIRROR, {}, {0.9, 0.9, 0.9}));
+    add_material(s, make_material(MATERIAL_GLASS, {}, {}, {}, 0.1f, 1.5f));
+    add_material(s, make_material(MATERIAL_DIFFUSE, {0, 0, 0}, {}, {3, 3, 3}));
+    add_material(s, make_material(MATERIAL_DIFFUSE, {0, 0, 0}, {}, {20, 15, 10}));
+    add_triangle(s, kBig0, kBig2, kBig1, kEmitBig);
+    add_triangle(s, kSmall0, kSmall1, kSmall2, kEmitSmall);
+    add_quad(s, {-2, -0.5, -2}, {-2, -0.5, 2}, {2, -0.5, 2}, {2, -0.5, -2}, kDiffuse);
+    LightDesc point;
+    point.kind = LightDesc::Kind::Point;
+    point.position = v3(kPointPos);
+    point.color = {2, 2, 2};
+    LightDesc spot;
+    spot.kind = LightDesc::Kind::Spot;
+    spot.position = v3(kSpotPos);
+    spot.target = v3(kSpotTarget);
+    spot.color = {6, 6, 6};
+    spot.cone_angle = 40;
+    spot.cone_delta = 10;
+    LightDesc dir;
+    dir.kind = LightDesc::Kind::Directional;
+    dir.direction = v3(kDirectionalDir);
+    dir.color = {0.5f, 0.5f, 0.5f};
+    LightDesc env;
+    env.kind = LightDesc::Kind::Environment;
+    env.color = {0.7f, 0.7f, 0.7f};
+    s.lights = {point, spot, dir, env};
+    s.environment_map = synthetic_environment(16, 8);
+    s.camera = camera_desc(true);
+    return s;
+}
+
+const TestScene& scene() {
+    static TestScene t(mis_scene(), kWidth, kHeight);
+    return t;
+}
+
+// ---- Reference densities in double -------------------------------------------------------------
+
+struct Reference {
+    const DeviceScene& ds;
+    Camera cam;
+    double radius;
+    int env_light = -1;
+    // The environment's per-texel sampling weights as tabulated by the host (lights_test.cpp
+    // checks the table); the density derived from them is recomputed here.
+    std::vector<double> env_func;
+    double env_integral = 0;
+
+    Reference(const DeviceScene& scene, const Camera& camera) : ds(scene), cam(camera) {
+        radius = ds.info.world_center.s[3];
+        env_light = ds.info.environment_light;
+        int w = ds.info.env_width, h = ds.info.env_height;
+        for (int i = 0; i < w * h; ++i) {
+            env_func.push_back(ds.env_distribution[size_t(i)]);
+            env_integral += env_func.back();
+        }
+        env_integral /= double(w) * h;
+    }
+
+    static void env_uv(D3 d, double* u, double* v) {
+        double phi = std::atan2(d.z, d.x);
+        if (phi < 0) phi += 2 * kPi;
+        *u = phi / (2 * kPi);
+        *v = std::acos(std::clamp(d.y, -1.0, 1.0)) / kPi;
+    }
+    // Solid-angle density of the environment sampling direction w (toward the light).
+    double env_pdf(D3 w) const {
+        double u, v;
+        env_uv(w, &u, &v);
+        int W = ds.info.env_width, H = ds.info.env_height;
+        int x = std::min(int(u * W), W - 1), y = std::min(int(v * H), H - 1);
+        return env_func[size_t(y) * W + x] / env_integral / (2 * kPi * kPi * std::sin(v * kPi));
+    }
+    // Whether w is safely inside a texel and away from the poles (float and double agree).
+    bool env_safe(D3 w) const {
+        double u, v;
+        env_uv(w, &u, &v);
+        auto inside = [](double t, int n) {
+            double f = t * n - std::floor(t * n);
+            return f > 0.01 && f < 0.99;
+        };
+        return inside(u, ds.info.env_width) && inside(v, ds.info.env_height) && v > 0.05 && v < 0.95;
+    }
+
+    // Raster position of a ray leaving the lens at `lens` along `dir` (camera_raster_of).
+    bool raster(D3 lens, D3 dir, double* rx, double* ry) const {
+        D3 right = d3(cam.right), up = d3(cam.up), fwd = d3(cam.forward), eye = d3(cam.eye);
+        D3 d(dot(dir, right), dot(dir, up), dot(dir, fwd));
+        if (d.z <= 0) return false;
+        D3 o(dot(lens - eye, right), dot(lens - eye, up), dot(lens - eye, fwd));
+        double plane = cam.lens_radius > 0 ? cam.focus_distance : 1.0;
+        D3 p = o + d * (plane / d.z);
+        *rx = (p.x / plane / cam.tan_half_width + 1) * 0.5 * cam.width;
+        *ry = (1 - p.y / plane / cam.tan_half_height) * 0.5 * cam.height;
+        return *rx >= 0 && *rx < cam.width && *ry >= 0 && *ry < cam.height;
+    }
+    // pdf_dir = 1 / (A cos^3) inside the film (camera_pdf_we).
+    double camera_pdf_dir(D3 lens, D3 dir) const {
+        double rx, ry;
+        double c = dot(dir, d3(cam.forward));
+        if (c <= 0 || !raster(lens, dir, &rx, &ry)) return 0;
+        return 1 / (double(cam.film_area) * c * c * c);
+    }
+
+    double luminance(D3 c) const { return 0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z; }
+    double ggx_d(double cos_h, double alpha) const {
+        double c2 = cos_h * cos_h, a2 = alpha * alpha, e = 1 + (1 - c2) / c2 / a2;
+        return 1 / (kPi * a2 * c2 * c2 * e * e);
+    }
+    // bsdf_pdf in the shading frame (README "Materials"): diffuse cos/pi, glossy the mixture
+    // of it and D(h) |cos h| / (4 |wo.h|) by the luminance of kd and ks.
+    double bsdf_pdf(int material, D3 ns, D3 wo, D3 wi) const {
+        const Material& m = ds.materials[material];
+        double co = dot(wo, ns), ci = dot(wi, ns);
+        if (co * ci <= 0) return 0;
+        double diffuse = std::fabs(ci) / kPi;
+        if (m.kind != MATERIAL_GLOSSY) return diffuse;
+        double ld = luminance(d3(m.kd)), ls = luminance(d3(m.ks));
+        double pd = ld + ls > 0 ? ld / (ld + ls) : 1;
+        D3 h = normalize(wo + wi);
+        double glossy = ggx_d(dot(h, ns), m.alpha) * std::fabs(dot(h, ns)) / (4 * std::fabs(dot(wo, h)));
+        return pd * diffuse + (1 - pd) * glossy;
+    }
+};
+
+// ---- Paths -------------------------------------------------------------------------------------
+
+struct HostVertex {
+    D3 p, ng, ns;      // ng = 0 off surfaces (camera, point and spot lights, lights at infinity)
+    int material = -1; // surfaces
+    bool specular = false;
+};
+
+struct Path {
+    std::vector<HostVertex> x;  // x[0] camera, x[n-1] light
+    int light = -1;             // index into ds.lights
+    bool thin = false;
+};
+
+int light_kind(const DeviceScene& ds, const Path& path) { return ds.lights[path.light].kind; }
+bool light_at_infinity(int kind) { return kind == LIGHT_ENVIRONMENT || kind == LIGHT_DIRECTIONAL; }
+
+// Area density at `to` of a solid-angle density at `from` (ConvertDensity): unchanged for a
+// light at infinity, no cosine off surfaces.
+double to_area(double pdf_w, const HostVertex& from, const HostVertex& to, bool to_at_infinity) {
+    if (to_at_infinity) return pdf_w;
+    D3 w = to.p - from.p;
+    double d2 = dot(w, w);
+    if (!is_zero(to.ng)) pdf_w *= std::fabs(dot(to.ng, w / std::sqrt(d2)));
+    return pdf_w / d2;
+}
+
+D3 dir(const HostVertex& from, const HostVertex& to) { return normalize(to.p - from.p); }
+
+struct Densities {
+    // cam[i]: density of x_i sampled by the camera subpath (i >= 1); light[j]: by the light
+    // subpath (j <= n-1; light[n-1] is the light vertex's own, light[n-2] the emission's).
+    // A vertex sampled through a specular vertex gets 1 (see the file comment).
+    std::vector<double> cam, light;
+};
+
+Densities densities(const Reference& ref, const Path& path) {
+    const std::vector<HostVertex>& x = path.x;
+    const int n = int(x.size());
+    const Light& L = ref.ds.lights[path.light];
+    const bool infinite = light_at_infinity(L.kind);
+    Densities d;
+    d.cam.assign(n, 0.0);
+    d.light.assign(n, 0.0);
+    for (int i = 1; i < n; ++i) {
+        bool to_infinite = i == n - 1 && infinite;
+        if (i == 1) {
+            d.cam[i] = to_area(ref.camera_pdf_dir(x[0].p, dir(x[0], x[1])), x[0], x[1], to_infinite);
+        } else if (x[i - 1].specular) {
+            d.cam[i] = 1;
+        } else {
+            double pdf = ref.bsdf_pdf(x[i - 1].material, x[i - 1].ns, dir(x[i - 1], x[i - 2]), dir(x[i - 1], x[i]));
+            d.cam[i] = to_area(pdf, x[i - 1], x[i], to_infinite);
+        }
+    }
+    const HostVertex& lv = x[n - 1];
+    D3 w_light = dir(x[n - 2], lv);  // toward the light
+    switch (L.kind) {
+    case LIGHT_AREA: {
+        const Triangle& t = ref.ds.triangles[L.triangle];
+        double area = 0.5 * length(cross(d3(t.p1) - d3(t.p0), d3(t.p2) - d3(t.p0)));
+        d.light[n - 1] = L.select_pdf / area;
+        d.light[n - 2] = to_area(std::max(0.0, dot(lv.ng, -w_light)) / kPi, lv, x[n - 2], false);
+        break;
+    }
+    case LIGHT_POINT:
+        d.light[n - 1] = L.select_pdf;  // times the delta position, common to every strategy
+        d.light[n - 2] = to_area(1 / (4 * kPi), lv, x[n - 2], false);
+        break;
+    case LIGHT_SPOT:
+        d.light[n - 1] = L.select_pdf;
+        d.light[n - 2] = to_area(dot(-w_light, d3(L.direction)) >= L.cos_total_width
+                                     ? 1 / (2 * kPi * (1 - double(L.cos_total_width)))
+                                     : 0.0,
+                                 lv, x[n - 2], false);
+        break;
+    case LIGHT_DIRECTIONAL:
+        d.light[n - 1] = L.select_pdf;  // times the delta direction, common to every strategy
+        d.light[n - 2] = std::fabs(dot(x[n - 2].ng, w_light)) / (kPi * ref.radius * ref.radius);
+        break;
+    case LIGHT_ENVIRONMENT:
+        d.light[n - 1] = L.select_pdf * ref.env_pdf(w_light);  // solid angle
+        d.light[n - 2] = std::fabs(dot(x[n - 2].ng, w_light)) / (kPi * ref.radius * ref.radius);
+        break;
+    }
+    for (int j = n - 3; j >= 1; --j) {
+        if (x[j + 1].specular) {
+            d.light[j] = 1;
+        } else {
+            double pdf = ref.bsdf_pdf(x[j + 1].material, x[j + 1].ns, dir(x[j + 1], x[j + 2]), dir(x[j + 1], x[j]));
+            d.light[j] = to_area(pdf, x[j + 1], x[j], false);
+        }
+    }
+    return d;
+}
+
+// strategy_enabled's rules, restated: t >= 1, s + t >= 2; (1,1) only for area lights; pt uses
+// s <= 1 < t, lt uses t = 1.
+bool enabled(Integrator integrator, int s, int t, bool area) {
+    if (t < 1 || s + t < 2) return false;
+    if (s == 1 && t == 1 && !area) return false;
+    switch (integrator) {
+    case Integrator::Pt: return s <= 1 && t >= 2;
+    case Integrator::Lt: return t == 1;
+    default: return true;
+    }
+}
+
+// Whether strategy (s, t) can produce the path: s = 0 needs an emitter a camera ray can hit
+// (area or environment); otherwise the connection x_{t-1} -- x_t joins non-specular vertices
+// (x_t may be any light when s = 1: Sample_Li).
+bool can_produce(const DeviceScene& ds, const Path& path, int s, int t) {
+    const int n = int(path.x.size());
+    int kind = light_kind(ds, path);
+    if (s == 0) return kind == LIGHT_AREA || kind == LIGHT_ENVIRONMENT;
+    if (path.x[t - 1].specular) return false;
+    if (s == 1) return true;
+    (void)n;
+    return !path.x[t].specular;
+}
+
+// ---- Subpaths as the random walk stores them ---------------------------------------------------
+
+// The value left in the densities mis_weight must replace (the walk would have stored whatever
+// its own continuation gave): if the kernel used one, its weight would be off.
+constexpr float kJunk = 777.0f;
+
+TestVertex test_vertex(const HostVertex& v, int type, int light, D3 wo, bool delta) {
+    TestVertex t{};
+    t.p = f4(v.p);
+    t.ng = f4(v.ng);
+    t.ns = f4(v.ns);
+    t.wo = f4(wo);
+    t.type = type;
+    t.delta = delta;
+    t.material = v.material;
+    t.light = light;
+    return t;
+}
+
+// Camera subpath x_0 .. x_{t-1}.
+std::vector<TestVertex> camera_subpath(const Reference& ref, const Path& path, const Densities& d, int t) {
+    const std::vector<HostVertex>& x = path.x;
+    const int n = int(x.size());
+    std::vector<TestVertex> out;
+    for (int i = 0; i < t; ++i) {
+        TestVertex v;
+        if (i == 0) {
+            v = test_vertex(x[0], kVertexCamera, -1, {}, false);
+            v.ng = v.ns = f4({});
+            v.pdf_fwd = 0;
+        } else if (i == n - 1) {  // the camera subpath ends on the emitter (s = 0)
+            int kind = ref.ds.lights[path.light].kind;
+            if (kind == LIGHT_ENVIRONMENT) {
+                v = test_vertex(x[i], kVertexLight, path.light, dir(x[i], x[i - 1]), false);
+                v.material = -1;
+            } else {
+                v = test_vertex(x[i], kVertexSurface, path.light, dir(x[i], x[i - 1]), false);
+                v.material = kEmitBig;  // not read: mis_weight never scatters at the emitter
+            }
+            v.pdf_fwd = float(i >= 2 && x[i - 1].specular ? 0.0 : d.cam[i]);
+        } else {
+            v = test_vertex(x[i], kVertexSurface, -1, dir(x[i], x[i - 1]), x[i].specular);
+            v.pdf_fwd = float(i >= 2 && x[i - 1].specular ? 0.0 : d.cam[i]);
+        }
+        // pdf_rev: the light-side density of x_i from x_{i+1}, which the walk knows when it
+        // samples x_{i+2}; 0 if x_{i+1} is specular. The last two are the connection's.
+        if (i <= t - 3 && i >= 1) v.pdf_rev = float(x[i + 1].specular ? 0.0 : d.light[i]);
+        else v.pdf_rev = kJunk;
+        out.push_back(v);
+    }
+    return out;
+}
+
+// Light subpath y_k = x_{n-1-k}, k = 0 .. s-1.
+std::vector<TestVertex> light_subpath(const Reference& ref, const Path& path, const Densities& d, int s) {
+    const std::vector<HostVertex>& x = path.x;
+    const int n = int(x.size());
+    const Light& L = ref.ds.lights[path.light];
+    std::vector<TestVertex> out;
+    for (int k = 0; k < s; ++k) {
+        int i = n - 1 - k;
+        TestVertex v;
+        if (k == 0) {
+            v = test_vertex(x[i], kVertexLight, path.light, x[i].ng, false);
+            v.material = -1;
+            if (light_at_infinity(L.kind)) {
+                // InfiniteLightDensity: the environment's density of the direction, times its
+                // selection probability (0 without an environment light).
+                D3 w_light = dir(x[n - 2], x[n - 1]);
+                v.pdf_fwd = float(ref.env_light >= 0 ? ref.ds.lights[ref.env_light].select_pdf * ref.env_pdf(w_light) : 0.0);
+            } else {
+                v.pdf_fwd = float(d.light[i]);
+            }
+        } else {
+            v = test_vertex(x[i], kVertexSurface, -1, dir(x[i], x[i + 1]), x[i].specular);
+            v.pdf_fwd = float(k >= 2 && x[i + 1].specular ? 0.0 : d.light[i]);
+        }
+        // pdf_rev: the camera-side density of x_i from x_{i-1}; 0 if x_{i-1} is specular.
+        if (k <= s - 3) v.pdf_rev = float(x[i - 1].specular ? 0.0 : d.cam[i]);
+        else v.pdf_rev = kJunk;
+        out.push_back(v);
+    }
+    return out;
+}
+
+// ---- Random paths ------------------------------------------------------------------------------
+
+struct PathGenerator {
+    const Reference& ref;
+    std::mt19937_64 rng;
+    std::uniform_real_distribution<double> uni{0, 1};
+    std::vector<int> area_lights;
+    int point = -1, spot = -1, directional = -1, environment = -1;
+
+    PathGenerator(const Reference& r, uint64_t seed) : ref(r), rng(seed) {
+        for (size_t i = 0; i < r.ds.lights.size(); ++i) {
+            switch (r.ds.lights[i].kind) {
+            case LIGHT_AREA: area_lights.push_back(int(i)); break;
+            case LIGHT_POINT: point = int(i); break;
+            case LIGHT_SPOT: spot = int(i); break;
+            case LIGHT_DIRECTIONAL: directional = int(i); break;
+            case LIGHT_ENVIRONMENT: environment = int(i); break;
+            }
+        }
+    }
+
+    double u() { return uni(rng); }
+    D3 unit() {
+        double z = 2 * u() - 1, phi = 2 * kPi * u();
+        return spherical(z, phi);
+    }
+    D3 round(D3 v) const { return as_float(v); }
+
+    // A normal with both neighbours in front of it (cos > 0.15), near the half vector for the
+    // sharp glossy lobe (so its density is not vanishingly small). Returns false if none.
+    bool pick_normal(D3 a, D3 b, double spread, D3* n) {
+        D3 h = a + b;
+        if (length(h) < 1e-3) return false;
+        h = normalize(h);
+        for (int tries = 0; tries < 64; ++tries) {
+            D3 c = round(normalize(h + spread * unit()));
+            if (dot(c, a) > 0.15 && dot(c, b) > 0.15) {
+                *n = c;
+                return true;
+            }
+        }
+        return false;
+    }
+
+    // A random path with `scatter` scattering vertices to light `light` (or nothing).
+    bool make(Path* path, int scatter, int light, bool thin) {
+        const Camera& cam = ref.cam;
+        const int n = scatter + 2;
+        const Light& L = ref.ds.lights[light];
+        path->x.assign(n, HostVertex());
+        path->light = light;
+        path->thin = thin;
+        std::vector<HostVertex>& x = path->x;
+        D3 eye = d3(cam.eye), right = d3(cam.right), up = d3(cam.up), fwd = d3(cam.forward);
+        // x_0 on the lens.
+        D3 lens = eye;
+        if (thin) {
+            double r = std::sqrt(u()) * cam.lens_radius, phi = 2 * kPi * u();
+            lens = eye + right * (r * std::cos(phi)) + up * (r * std::sin(phi));
+        }
+        x[0].p = round(lens);
+        // x_1 through a random raster position (not on the film's edge).
+        double rx = 2 + u() * (cam.width - 4), ry = 2 + u() * (cam.height - 4);
+        D3 film = right * ((2 * rx / cam.width - 1) * cam.tan_half_width) +
+                  up * ((1 - 2 * ry / cam.height) * cam.tan_half_height) + fwd;
+        D3 d1 = thin ? normalize(eye + film * double(cam.focus_distance) - x[0].p) : normalize(film);
+        double r = ref.radius;
+        // The light vertex and the last scattering vertex.
+        if (n == 2) {
+            if (L.kind == LIGHT_AREA) {
+                // A point on the light the camera sees.
+                const Triangle& t = ref.ds.triangles[L.triangle];
+                double b1 = u(), b2 = u();
+                if (b1 + b2 > 1) b1 = 1 - b1, b2 = 1 - b2;
+                x[1].p = round(d3(t.p0) * (1 - b1 - b2) + d3(t.p1) * b1 + d3(t.p2) * b2);
+                x[1].ng = x[1].ns = round(normalize(cross(d3(t.p1) - d3(t.p0), d3(t.p2) - d3(t.p0))));
+                double qx, qy;
+                if (!ref.raster(x[0].p, dir(x[0], x[1]), &qx, &qy) || qx < 1 || qy < 1 || qx > cam.width - 1 ||
+                    qy > cam.height - 1)
+                    return false;
+                if (dot(x[1].ng, dir(x[1], x[0])) < 0.15) return false;
+                return true;
+            }
+            if (L.kind != LIGHT_ENVIRONMENT) return false;  // no strategy sees a delta light directly
+            if (!ref.env_safe(d1)) return false;
+            x[1].p = round(x[0].p + d1 * (2 * r));
+            return true;
+        }
+        x[1].p = round(x[0].p + d1 * (1.5 + 3 * u()));
+        for (int i = 2; i < n - 1; ++i) {
+            x[i].p = round(D3(-1.5 + 3 * u(), -0.3 + 2.1 * u(), -1.2 + 2.7 * u()));
+            if (length(x[i].p - x[i - 1].p) < 0.3) return false;
+        }
+        HostVertex& lv = x[n - 1];
+        const HostVertex& last = x[n - 2];
+        switch (L.kind) {
+        case LIGHT_AREA: {
+            const Triangle& t = ref.ds.triangles[L.triangle];
+            double b1 = u(), b2 = u();
+            if (b1 + b2 > 1) b1 = 1 - b1, b2 = 1 - b2;
+            lv.p = round(d3(t.p0) * (1 - b1 - b2) + d3(t.p1) * b1 + d3(t.p2) * b2);
+            lv.ng = lv.ns = round(normalize(cross(d3(t.p1) - d3(t.p0), d3(t.p2) - d3(t.p0))));
+            if (dot(lv.ng, dir(lv, last)) < 0.15) return false;  // one-sided emitter
+            break;
+        }
+        case LIGHT_POINT: lv.p = d3(L.position); break;
+        case LIGHT_SPOT:
+            lv.p = d3(L.position);
+            if (dot(dir(lv, last), d3(L.direction)) < double(L.cos_total_width) + 0.01) return false;
+            break;
+        case LIGHT_DIRECTIONAL: lv.p = round(last.p - d3(L.direction) * (2 * r)); break;
+        case LIGHT_ENVIRONMENT: {
+            D3 w = unit();
+            if (!ref.env_safe(w)) return false;
+            lv.p = round(last.p + w * (2 * r));
+            break;
+        }
+        }
+        if (length(lv.p - last.p) < 0.3) return false;
+        // Materials and normals of the scattering vertices.
+        for (int i = 1; i < n - 1; ++i) {
+            double m = u();
+            int material = m < 0.3 ? kDiffuse : m < 0.5 ? kGlossyRough : m < 0.7 ? kGlossySharp : m < 0.85 ? kMirror : kGlass;
+            x[i].material = material;
+            x[i].specular = material == kMirror || material == kGlass;
+            D3 a = dir(x[i], x[i - 1]), b = dir(x[i], x[i + 1]);
+            if (x[i].specular) {
+                D3 h = a + b;
+                if (length(h) < 1e-3) return false;
+                x[i].ng = x[i].ns = round(normalize(h));  // a mirror reflects a into b
+                continue;
+            }
+            double spread = material == kGlossySharp ? 0.03 : 0.6;
+            if (!pick_normal(a, b, spread, &x[i].ns)) return false;
+            x[i].ng = x[i].ns;
+            if (u() < 0.3) {  // a shading normal differing from the geometric one
+                D3 g = round(normalize(x[i].ns + 0.15 * unit()));
+                if (dot(g, a) > 0.15 && dot(g, b) > 0.15) x[i].ng = g;
+            }
+        }
+        return true;
+    }
+};
+
+// ---- The test ----------------------------------------------------------------------------------
+
+struct CaseRef {
+    size_t path;
+    int s, t;
+    double weight;  // brute force
+};
+
+// Weights agree to 1e-3 relative: the kernel's ratios are float products of at most 6 ratios
+// of float densities (each good to ~1e-6), and 1e-3 leaves room for the GGX alpha 0.05 lobes'
+// ~1e-4 float error (bsdf_test.cpp) at the connection vertices. Any convention mismatch (a
+// missing cosine, a density in the wrong measure, a wrong delta rule) moves weights by O(1).
+constexpr double kWeightTolerance = 1e-3;
+// The weights of every strategy that can produce a path sum to 1 (float rounding).
+constexpr double kSumTolerance = 1e-4;
+
+void check_integrator(Integrator integrator, bool thin, uint64_t seed) {
+    const TestScene& ts = scene();
+    Camera cam = make_camera(camera_desc(thin), kWidth, kHeight);
+    Reference ref(ts.ds, cam);
+    PathGenerator gen(ref, seed);
+
+    std::vector<Path> paths;
+    std::vector<TestVertex> vertices;
+    std::vector<MisCase> cases;
+    std::vector<CaseRef> refs;
+    std::vector<int> lights = gen.area_lights;
+    for (int l : {gen.point, gen.spot, gen.directional, gen.environment}) lights.push_back(l);
+    const size_t target = 1200;
+    size_t attempts = 0;
+    std::vector<size_t> per_kind(5, 0);
+    while (paths.size() < target && attempts < 200 * target) {
+        ++attempts;
+        int scatter = int(gen.u() * 6);  // depth 0 .. 5
+        int light = lights[size_t(gen.u() * lights.size())];
+        Path path;
+        if (!gen.make(&path, scatter, light, thin)) continue;
+        const int n = int(path.x.size());
+        Densities d = densities(ref, path);
+        bool area = light_kind(ts.ds, path) == LIGHT_AREA;
+        std::vector<int> producers;
+        double sum = 0;
+        std::vector<double> p(n + 1, 0.0);
+        for (int s = 0; s <= n; ++s) {
+            int t = n - s;
+            if (!enabled(integrator, s, t, area) || !can_produce(ts.ds, path, s, t)) continue;
+            double ps = 1;
+            for (int i = 1; i < t; ++i) ps *= d.cam[i];
+            for (int j = t; j < n; ++j) ps *= d.light[j];
+            ASSERT_TRUE(ps > 0 && std::isfinite(ps)) << "degenerate density for s " << s;
+            p[s] = ps;
+            sum += ps;
+            producers.push_back(s);
+        }
+        if (producers.empty()) continue;
+        size_t index = paths.size();
+        paths.push_back(path);
+        ++per_kind[size_t(light_kind(ts.ds, path))];
+        for (int s : producers) {
+            int t = n - s;
+            MisCase c{};
+            c.s = s;
+            c.t = t;
+            c.light_offset = int(vertices.size());
+            for (const TestVertex& v : light_subpath(ref, path, d, s)) vertices.push_back(v);
+            c.camera_offset = int(vertices.size());
+            for (const TestVertex& v : camera_subpath(ref, path, d, t)) vertices.push_back(v);
+            cases.push_back(c);
+            refs.push_back({index, s, t, p[s] / sum});
+        }
+    }
+    ASSERT_EQ(paths.size(), target) << "could not generate enough paths";
+    for (int kind = 0; kind < 5; ++kind) EXPECT_GT(per_kind[kind], target / 20) << "light kind " << kind;
+
+    std::vector<std::string> defines;
+    for (const std::string& d : ts.defines)
+        defines.push_back(d.rfind("INTEGRATOR=", 0) == 0 ? "INTEGRATOR=" + std::to_string(int(integrator)) : d);
+    cl::Kernel k = test_kernel("kernels/mis_brute_force_test.cl", defines, "mis_weight_test");
+    ts.buffers->set_args(k);
+    k.setArg(9, cam);
+    cl::Buffer vb = upload(vertices), cb = upload(cases), out = output_buffer<float>(cases.size());
+    k.setArg(SceneBuffers::kSceneArgCount, vb);
+    k.setArg(SceneBuffers::kSceneArgCount + 1, cb);
+    k.setArg(SceneBuffers::kSceneArgCount + 2, out);
+    launch(k, cases.size());
+    std::vector<float> w = download<float>(out, cases.size());
+
+    std::vector<double> sums(paths.size(), 0.0);
+    size_t failures = 0;
+    double worst = 0;
+    for (size_t i = 0; i < cases.size(); ++i) {
+        const CaseRef& r = refs[i];
+        sums[r.path] += w[i];
+        double e = rel_diff(w[i], r.weight, 1e-7);
+        worst = std::max(worst, e);
+        if (e > kWeightTolerance && ++failures <= 10) {
+            const Path& path = paths[r.path];
+            std::string desc;
+            for (size_t j = 1; j + 1 < path.x.size(); ++j) desc += std::to_string(path.x[j].material) + " ";
+            ADD_FAILURE() << integrator_name(integrator) << (thin ? " thin lens" : " pinhole") << ": path " << r.path
+                          << " (n " << path.x.size() << ", light kind " << light_kind(ts.ds, path)
+                          << ", materials " << desc << ") s " << r.s << " t " << r.t << ": kernel weight " << w[i]
+                          << ", brute force " << r.weight;
+        }
+    }
+    EXPECT_EQ(failures, 0u) << "worst relative error " << worst << " over " << cases.size() << " weights";
+    for (size_t j = 0; j < paths.size(); ++j)
+        EXPECT_NEAR(sums[j], 1.0, kSumTolerance) << integrator_name(integrator) << " path " << j;
+}
+
+TEST(MisBruteForce, BdptPinhole) { check_integrator(Integrator::Bdpt, false, 101); }
+TEST(MisBruteForce, BdptThinLens) { check_integrator(Integrator::Bdpt, true, 102); }
+TEST(MisBruteForce, PtPinhole) { check_integrator(Integrator::Pt, false, 103); }
+TEST(MisBruteForce, PtThinLens) { check_integrator(Integrator::Pt, true, 104); }
+TEST(MisBruteForce, LtPinhole) { check_integrator(Integrator::Lt, false, 105); }
+TEST(MisBruteForce, LtThinLens) { check_integrator(Integrator::Lt, true, 106); }
+
+}  // namespace
+}  // namespace clbdpt::test
