@@ -66,42 +66,58 @@ inline uint reverse_bits(uint x) {
     return (x >> 16) | (x << 16);
 }
 
-/* Nested uniform (Owen) scrambling in base 2: a hash that only lets each bit depend on the
- * bits above it, applied to the bit-reversed value (Laine-Karras style; constants from
- * pbrt-v4's FastOwenScrambler). */
-inline uint owen_scramble(uint v, uint seed) {
-    v = reverse_bits(v);
+/* The hash at the heart of nested uniform (Owen) scrambling: each output bit depends only on
+ * the input bits below it (Laine-Karras style; constants from pbrt-v4's FastOwenScrambler).
+ * Applied to a bit-reversed value it flips each digit of the binary fraction depending only on
+ * the digits before it, which is Owen scrambling. */
+inline uint owen_hash(uint v, uint seed) {
     v ^= v * 0x3d20adeau;
     v += seed;
     v *= (seed >> 16) | 1u;
     v ^= v * 0x05526c56u;
     v ^= v * 0x53a22864u;
-    return reverse_bits(v);
+    return v;
 }
 
-/* Second Sobol dimension: generator matrix columns v_1 = 2^31, v_{k+1} = v_k ^ (v_k >> 1)
- * (the Pascal matrix mod 2; the first dimension is the bit reversal). */
-inline uint sobol_dimension1(uint index) {
-    uint x = 0, v = 0x80000000u;
-    for (; index != 0; index >>= 1, v ^= v >> 1)
-        if (index & 1u) x ^= v;
+inline uint owen_scramble(uint v, uint seed) { return reverse_bits(owen_hash(reverse_bits(v), seed)); }
+
+/* Second Sobol dimension, bit-reversed: the generator matrix columns v_1 = 2^31,
+ * v_{k+1} = v_k ^ (v_k >> 1) (the Pascal matrix mod 2) stored reversed, so the result can go
+ * straight into owen_hash. (The first dimension is the bit reversal of the index, reversed: the
+ * index itself.) The loop runs once per set bit of the index. */
+__constant uint SOBOL_DIMENSION1_REVERSED_COLUMNS[32] = {
+    0x00000001u, 0x00000003u, 0x00000005u, 0x0000000fu, 0x00000011u, 0x00000033u, 0x00000055u, 0x000000ffu,
+    0x00000101u, 0x00000303u, 0x00000505u, 0x00000f0fu, 0x00001111u, 0x00003333u, 0x00005555u, 0x0000ffffu,
+    0x00010001u, 0x00030003u, 0x00050005u, 0x000f000fu, 0x00110011u, 0x00330033u, 0x00550055u, 0x00ff00ffu,
+    0x01010101u, 0x03030303u, 0x05050505u, 0x0f0f0f0fu, 0x11111111u, 0x33333333u, 0x55555555u, 0xffffffffu};
+
+inline uint sobol_dimension1_reversed(uint index) {
+    uint x = 0;
+    while (index != 0) {
+        uint bit = 31u - clz(index);
+        x ^= SOBOL_DIMENSION1_REVERSED_COLUMNS[bit];
+        index ^= 1u << bit;
+    }
     return x;
 }
 
-/* Both components of draw `draw` for this sample. */
-inline float2 sobol_pair(const Rng* rng, uint draw) {
-    uint seed = hash_u32(rng->key ^ hash_u32(draw + 0x632be5abu));
-    /* Shuffling the index with a nested uniform scramble keeps every power-of-two prefix of a
-     * pixel's samples a (0,2)-net, whatever spp is rendered. */
+/* The per-draw seed and the shuffled index: shuffling the index with a nested uniform scramble
+ * keeps every power-of-two prefix of a pixel's samples a (0,2)-net, whatever spp is rendered. */
+inline uint sobol_draw_seed(const Rng* rng, uint draw) { return hash_u32(rng->key ^ hash_u32(draw + 0x632be5abu)); }
+
+inline float rng_next(Rng* rng) {
+    uint seed = sobol_draw_seed(rng, rng->dimension++);
     uint index = owen_scramble(rng->sample_index, seed);
-    uint x = owen_scramble(reverse_bits(index), hash_u32(seed ^ 0xa511e9b3u));
-    uint y = owen_scramble(sobol_dimension1(index), hash_u32(seed ^ 0x63d83595u));
-    return (float2)(bits_to_unit_float(x), bits_to_unit_float(y));
+    return bits_to_unit_float(reverse_bits(owen_hash(index, hash_u32(seed ^ 0xa511e9b3u))));
 }
 
-inline float rng_next(Rng* rng) { return sobol_pair(rng, rng->dimension++).x; }
-
-inline float2 rng_next2(Rng* rng) { return sobol_pair(rng, rng->dimension++); }
+inline float2 rng_next2(Rng* rng) {
+    uint seed = sobol_draw_seed(rng, rng->dimension++);
+    uint index = owen_scramble(rng->sample_index, seed);
+    uint x = reverse_bits(owen_hash(index, hash_u32(seed ^ 0xa511e9b3u)));
+    uint y = reverse_bits(owen_hash(sobol_dimension1_reversed(index), hash_u32(seed ^ 0x63d83595u)));
+    return (float2)(bits_to_unit_float(x), bits_to_unit_float(y));
+}
 
 #else
 

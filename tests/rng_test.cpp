@@ -1,0 +1,72 @@
+// The Sobol sampler's promise: for every pixel and every draw, the first 2^m samples' 2D values
+// form a (0,m,2)-net — each elementary interval [a/2^i, (a+1)/2^i) x [b/2^(m-i), ...) holds
+// exactly one point — for any power-of-two count, since the index shuffle keeps prefixes
+// whole. The independent sampler has no such structure (and is checked not to, so the test
+// can fail).
+#include <gtest/gtest.h>
+
+#include "device/opencl.h"
+#include "render_test_util.h"
+
+namespace clbdpt::test {
+namespace {
+
+std::vector<cl_float2> values(const std::vector<std::string>& defines, uint32_t pixel, uint32_t draw, int n) {
+    DeviceContext& device = test_device();
+    const ProgramBuild& build = device.program("kernels/rng_test.cl", defines);
+    cl::Kernel kernel(build.program, "sample_values");
+    cl::Buffer out(device.context(), CL_MEM_WRITE_ONLY, sizeof(cl_float2) * n);
+    kernel.setArg(0, pixel);
+    kernel.setArg(1, uint32_t(3));
+    kernel.setArg(2, draw);
+    kernel.setArg(3, out);
+    device.queue().enqueueNDRangeKernel(kernel, cl::NullRange, cl::NDRange(size_t(n)), cl::NullRange);
+    std::vector<cl_float2> host(n);
+    device.queue().enqueueReadBuffer(out, CL_TRUE, 0, sizeof(cl_float2) * n, host.data());
+    return host;
+}
+
+bool is_net(const std::vector<cl_float2>& points, int m) {
+    const int n = 1 << m;
+    for (int i = 0; i <= m; ++i) {
+        const int cols = 1 << i, rows = 1 << (m - i);
+        std::vector<int> count(size_t(n), 0);
+        for (int k = 0; k < n; ++k) {
+            int cx = std::min(int(points[k].s[0] * cols), cols - 1);
+            int cy = std::min(int(points[k].s[1] * rows), rows - 1);
+            if (++count[size_t(cy) * cols + cx] > 1) return false;
+        }
+    }
+    return true;
+}
+
+TEST(Rng, SobolPrefixesAreNets) {
+    for (uint32_t pixel : {0u, 17u, 4093u})
+        for (uint32_t draw : {0u, 1u, 9u, 40u}) {
+            std::vector<cl_float2> v = values({"SAMPLER_SOBOL"}, pixel, draw, 256);
+            for (int m = 1; m <= 8; ++m) EXPECT_TRUE(is_net(v, m)) << "pixel " << pixel << " draw " << draw << " m " << m;
+            for (const cl_float2& p : v) {
+                EXPECT_GE(p.s[0], 0.0f);
+                EXPECT_LT(p.s[0], 1.0f);
+                EXPECT_GE(p.s[1], 0.0f);
+                EXPECT_LT(p.s[1], 1.0f);
+            }
+        }
+}
+
+TEST(Rng, DrawsAndPixelsAreDecorrelated) {
+    // Different pixels and draws get different scrambles: their point sets differ.
+    std::vector<cl_float2> a = values({"SAMPLER_SOBOL"}, 5, 2, 16), b = values({"SAMPLER_SOBOL"}, 6, 2, 16),
+                           c = values({"SAMPLER_SOBOL"}, 5, 3, 16);
+    EXPECT_NE(a[0].s[0], b[0].s[0]);
+    EXPECT_NE(a[0].s[0], c[0].s[0]);
+}
+
+TEST(Rng, IndependentSamplerIsNotANet) {
+    // 64 uniform random points form a (0,6,2)-net with negligible probability.
+    std::vector<cl_float2> v = values({}, 0, 0, 64);
+    EXPECT_FALSE(is_net(v, 6));
+}
+
+}  // namespace
+}  // namespace clbdpt::test
