@@ -74,6 +74,9 @@ TEST_F(CliTest, BadInputGivesOneErrorLineAndNoOutput) {
         {"unknown device", data("defaults.json") + tiny + " --device no-such-device-xyz", "no-such-device-xyz"},
         {"unknown device index", data("defaults.json") + tiny + " --device 999", "999"},
         {"unsupported output", data("defaults.json") + tiny, "unsupported output"},
+        {"film too large for memory", data("defaults.json") + " --spp 1 --width 32768 --height 32768 --strategy-images " +
+                                          out("strategies"),
+         "host memory"},
     };
     for (const BadInput& c : cases) {
         std::string output = std::string(c.name) == "unsupported output" ? out("image.xyz") : out("image.png");

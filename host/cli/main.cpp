@@ -131,6 +131,23 @@ void write_strategy_images(const std::string& dir, const Film& film, int max_dep
         }
 }
 
+// The film's double-precision sums live in host memory; a size that cannot fit is refused up
+// front with a clear message rather than left to the allocator (or the OOM killer).
+void check_film_fits_in_memory(int width, int height, int strategy_depth) {
+    const double pixels = double(width) * double(height);
+    // camera and light sums, plus per-strategy sums with --strategy-images, 3 doubles each,
+    // and the float image written at the end.
+    const double strategies = strategy_depth > 0 ? double(strategy_depth + 2) * (strategy_depth + 3) : 0.0;
+    const double bytes = pixels * 3.0 * (8.0 * (2.0 + strategies) + 4.0);
+    const double physical = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGE_SIZE));
+    if (physical > 0 && bytes > 0.8 * physical) {
+        char buf[200];
+        std::snprintf(buf, sizeof buf, "a %dx%d film needs %.1f GiB of host memory, more than this machine has (%.1f GiB)",
+                      width, height, bytes / double(1 << 30), physical / double(1 << 30));
+        throw Error(buf);
+    }
+}
+
 int run_render(const RenderArgs& args) {
     Scene scene = load_scene(args.scene);
     for (const std::string& w : scene.warnings) std::fprintf(stderr, "clbdpt: warning: %s\n", w.c_str());
@@ -140,6 +157,7 @@ int run_render(const RenderArgs& args) {
         throw Error("unsupported output format '" + output + "' (use .exr, .png, .jpg or .tif)");
     const int width = args.width > 0 ? args.width : scene.width;
     const int height = args.height > 0 ? args.height : scene.height;
+    check_film_fits_in_memory(width, height, args.strategy_images.empty() ? 0 : (args.max_depth >= 0 ? args.max_depth : scene.render.max_depth));
 
     RenderOptions options;
     options.integrator = parse_integrator(args.integrator);
@@ -285,8 +303,8 @@ int main(int argc, char** argv) {
     render->add_option("--device", args.device,
                        "Device index or name substring (default: first GPU, else first CPU); several separated "
                        "by commas, or 'all', share the render");
-    render->add_option("--width", args.width, "Film width override")->check(CLI::PositiveNumber);
-    render->add_option("--height", args.height, "Film height override")->check(CLI::PositiveNumber);
+    render->add_option("--width", args.width, "Film width override")->check(CLI::Range(1, 32768));
+    render->add_option("--height", args.height, "Film height override")->check(CLI::Range(1, 32768));
     render->add_option("--stats", args.stats, "Write a JSON summary (spp, seconds, samples/s, rays/s, ...)");
     render->add_option("--integrator", args.integrator, "bdpt (all strategies), pt (s <= 1) or lt (t = 1)")
         ->check(CLI::IsMember({"bdpt", "pt", "lt"}));
