@@ -22,11 +22,11 @@ constexpr int kFilm = 16;
 constexpr int kBlocks = 4;
 constexpr int kPasses = 48;
 
-// Tolerance: 16 regions and the image mean per render, 12 renders, so about 200 comparisons.
-// At 4.5 standard errors a correct renderer fails one with probability ~200 * 6.8e-6 = 1.4e-3
+// Tolerance: 16 regions and the image mean per render, 15 renders, so about 250 comparisons.
+// At 4.5 standard errors a correct renderer fails one with probability ~250 * 6.8e-6 = 1.7e-3
 // under a normal model (the seeds are fixed, so a pass stays a pass). With 48 passes the
 // standard error is itself estimated from 47 degrees of freedom; Student's t puts the same
-// 4.5 at about 5e-5 per comparison, 1% for the whole set, still rare. A real error of the
+// 4.5 at about 5e-5 per comparison, ~1% for the whole set, still rare. A real error of the
 // scale of one strategy (a factor pi, a missing cosine) is tens to hundreds of standard errors.
 // pt at d = 0 is deterministic (every camera ray hits an emitter); the 1e-5 relative floor in
 // expect_matches covers float rounding there.

@@ -3,7 +3,13 @@
 // unbiased on the paths it can reach; they are compared only where their reach is the same:
 //   - lt (t = 1 only) cannot reach paths whose camera side starts with a specular vertex
 //     (mirror, glass) nor an environment seen directly: no lt on cornell-specular and sky;
-//   - point and spot lights are invisible to every strategy set, so lt is fine on point-spot.
+//   - point and spot lights are invisible to every strategy set, so lt is fine on point-spot;
+//   - veach-mis: lt reaches every path in principle, but the reflections of its small lights
+//     in the sharpest plates (GGX alpha 0.0016) are found by a light subpath only when it lands
+//     where the camera sees the mirror image, so lt's per-pass values there are extremely
+//     heavy-tailed: measured on a 40x40 film, one region is 0.011 +- 0.0003 (64 passes),
+//     0.14 +- 0.12 (1024), 0.030 +- 0.006 (8192) against bdpt's 0.055 +- 0.002. Its standard
+//     error is not a usable tolerance at any affordable count, so lt is not compared there.
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -55,7 +61,7 @@ TEST_P(SceneAgreementTest, IntegratorsAgree) {
 INSTANTIATE_TEST_SUITE_P(Bundled, SceneAgreementTest,
                          ::testing::Values(AgreementCase{"cornell-specular", false, 96},
                                            AgreementCase{"lamp-ceiling", true, 64},
-                                           AgreementCase{"veach-mis", true, 64},
+                                           AgreementCase{"veach-mis", false, 64},
                                            AgreementCase{"point-spot", true, 64},
                                            AgreementCase{"sky", false, 64}),
                          [](const ::testing::TestParamInfo<AgreementCase>& info) {

@@ -6,7 +6,8 @@
 //     STAT <test>/<comparison> <statistic> <threshold> <pass|fail>
 //
 // The statistic is the largest |difference| / (combined standard error) over the image mean
-// and the regions compared; the threshold is the number of standard errors allowed.
+// and the regions compared, the threshold the number of standard errors allowed; for exact
+// checks (a sum of pixels that must be 0) the statistic is the quantity and the threshold 0.
 #pragma once
 
 #include <gtest/gtest.h>
@@ -330,6 +331,96 @@ inline RegionStats render_stats_or_fail(const DeviceScene& scene, const RenderOp
         empty.image_std_error = NAN;
         return empty;
     }
+}
+
+// Paired comparison of two scenes that should give the same image: both are rendered with the
+// same options and seed, pass by pass, so pass p of each uses the same random numbers and
+// their difference cancels most of the noise (in a scaled scene most paths are the same
+// paths). Passes are still independent of each other, so the mean of the per-pass
+// differences has the standard error of their spread / sqrt(passes): a far sharper test of
+// "same expected image" than two independent renders, and as valid.
+struct PairedStats {
+    RegionStats a, b;  // each scene on its own (mean and standard error)
+    RegionStats diff;  // a - b per region and for the image
+};
+
+inline std::vector<double> region_values(const std::vector<float>& img, int w, int h, int blocks) {
+    const int regions = blocks * blocks;
+    std::vector<double> value(regions + 1, 0.0);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            int region = (y * blocks / h) * blocks + (x * blocks / w);
+            for (int c = 0; c < 3; ++c) {
+                double v = img[(size_t(y) * w + x) * 3 + c];
+                value[region] += v;
+                value[regions] += v;
+            }
+        }
+    for (int r = 0; r <= regions; ++r) value[r] *= r < regions ? double(regions) / (3.0 * w * h) : 1.0 / (3.0 * w * h);
+    return value;
+}
+
+inline PairedStats render_paired(const DeviceScene& scene_a, const DeviceScene& scene_b, const RenderOptions& options,
+                                 int passes, int blocks) {
+    Renderer ra(test_device(), scene_a, options), rb(test_device(), scene_b, options);
+    const int w = scene_a.camera.width, h = scene_a.camera.height;
+    const int n = blocks * blocks + 1;
+    std::vector<double> sum[3], sum2[3];
+    for (auto& v : sum) v.assign(n, 0.0);
+    for (auto& v : sum2) v.assign(n, 0.0);
+    for (int pass = 0; pass < passes; ++pass) {
+        Film fa(w, h), fb(w, h);
+        ra.render_passes(fa, uint32_t(pass), 1);
+        rb.render_passes(fb, uint32_t(pass), 1);
+        std::vector<double> va = region_values(fa.image(), w, h, blocks), vb = region_values(fb.image(), w, h, blocks);
+        for (int r = 0; r < n; ++r) {
+            const double v[3] = {va[r], vb[r], va[r] - vb[r]};
+            for (int k = 0; k < 3; ++k) {
+                sum[k][r] += v[k];
+                sum2[k][r] += v[k] * v[k];
+            }
+        }
+    }
+    PairedStats out;
+    RegionStats* st[3] = {&out.a, &out.b, &out.diff};
+    for (int k = 0; k < 3; ++k) {
+        st[k]->blocks = blocks;
+        for (int r = 0; r < n; ++r) {
+            double m = sum[k][r] / passes;
+            double var = std::max(0.0, sum2[k][r] / passes - m * m) * passes / (passes - 1);
+            double se = std::sqrt(var / passes);
+            if (r + 1 < n) {
+                st[k]->mean.push_back(m);
+                st[k]->std_error.push_back(se);
+            } else {
+                st[k]->image_mean = m;
+                st[k]->image_std_error = se;
+            }
+        }
+    }
+    return out;
+}
+
+// Whether the paired difference is zero within `sigmas` of its standard error, with a floor
+// of rel_floor times the compared values (a bit-identical pair has a standard error of 0).
+inline double expect_same_paired(const PairedStats& p, double sigmas, const std::string& what, double rel_floor = 1e-5) {
+    double worst = 0;
+    for (size_t r = 0; r <= p.diff.mean.size(); ++r) {
+        bool image = r == p.diff.mean.size();
+        double d = image ? p.diff.image_mean : p.diff.mean[r];
+        double se = image ? p.diff.image_std_error : p.diff.std_error[r];
+        double scale = image ? std::max(std::fabs(p.a.image_mean), std::fabs(p.b.image_mean))
+                             : std::max(std::fabs(p.a.mean[r]), std::fabs(p.b.mean[r]));
+        double s = std::sqrt(se * se + rel_floor * rel_floor * scale * scale);
+        double z = s > 0 ? std::fabs(d) / s : (d != 0 ? INFINITY : 0.0);
+        if (std::isnan(z)) z = INFINITY;
+        worst = std::max(worst, z);
+        EXPECT_LE(z, sigmas) << what << (image ? " image mean" : " region " + std::to_string(r)) << ": "
+                             << (image ? p.a.image_mean : p.a.mean[r]) << " vs " << (image ? p.b.image_mean : p.b.mean[r])
+                             << ", paired difference " << d << " +- " << se << " (" << z << " standard errors)";
+    }
+    report_stat(what, worst, sigmas, !(worst > sigmas));
+    return worst;
 }
 
 inline RenderOptions make_options(Integrator integrator, int max_depth, uint32_t seed,
