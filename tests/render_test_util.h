@@ -35,6 +35,24 @@ struct RegionStats {
     double image_std_error = 0;
 };
 
+// Mean over the pixels and channels of each of blocks x blocks regions, then of the image
+// (the last entry).
+inline std::vector<double> region_values(const std::vector<float>& img, int w, int h, int blocks) {
+    const int regions = blocks * blocks;
+    std::vector<double> value(regions + 1, 0.0);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            int region = (y * blocks / h) * blocks + (x * blocks / w);
+            for (int c = 0; c < 3; ++c) {
+                double v = img[(size_t(y) * w + x) * 3 + c];
+                value[region] += v;
+                value[regions] += v;
+            }
+        }
+    for (int r = 0; r <= regions; ++r) value[r] *= r < regions ? double(regions) / (3.0 * w * h) : 1.0 / (3.0 * w * h);
+    return value;
+}
+
 inline RegionStats render_region_stats(const DeviceScene& scene, RenderOptions options, int passes, int blocks) {
     Renderer renderer(test_device(), scene, options);
     const int w = scene.camera.width, h = scene.camera.height;
@@ -43,22 +61,10 @@ inline RegionStats render_region_stats(const DeviceScene& scene, RenderOptions o
     for (int pass = 0; pass < passes; ++pass) {
         Film film(w, h);
         renderer.render_passes(film, uint32_t(pass), 1);
-        std::vector<float> img = film.image();
-        std::vector<double> value(regions + 1, 0.0);
-        for (int y = 0; y < h; ++y)
-            for (int x = 0; x < w; ++x) {
-                int region = (y * blocks / h) * blocks + (x * blocks / w);
-                for (int c = 0; c < 3; ++c) {
-                    double v = img[(size_t(y) * w + x) * 3 + c];
-                    value[region] += v;
-                    value[regions] += v;
-                }
-            }
+        std::vector<double> value = region_values(film.image(), w, h, blocks);
         for (int r = 0; r <= regions; ++r) {
-            double norm = r < regions ? double(regions) / (3.0 * w * h) : 1.0 / (3.0 * w * h);
-            double v = value[r] * norm;
-            sum[r] += v;
-            sum2[r] += v * v;
+            sum[r] += value[r];
+            sum2[r] += value[r] * value[r];
         }
     }
     RegionStats st;

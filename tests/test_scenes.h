@@ -344,21 +344,6 @@ struct PairedStats {
     RegionStats diff;  // a - b per region and for the image
 };
 
-inline std::vector<double> region_values(const std::vector<float>& img, int w, int h, int blocks) {
-    const int regions = blocks * blocks;
-    std::vector<double> value(regions + 1, 0.0);
-    for (int y = 0; y < h; ++y)
-        for (int x = 0; x < w; ++x) {
-            int region = (y * blocks / h) * blocks + (x * blocks / w);
-            for (int c = 0; c < 3; ++c) {
-                double v = img[(size_t(y) * w + x) * 3 + c];
-                value[region] += v;
-                value[regions] += v;
-            }
-        }
-    for (int r = 0; r <= regions; ++r) value[r] *= r < regions ? double(regions) / (3.0 * w * h) : 1.0 / (3.0 * w * h);
-    return value;
-}
 
 inline PairedStats render_paired(const DeviceScene& scene_a, const DeviceScene& scene_b, const RenderOptions& options,
                                  int passes, int blocks) {
