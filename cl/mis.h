@@ -25,11 +25,14 @@ inline float remap0(float f) { return f != 0.0f ? f : 1.0f; }
  * s = 1), ignored otherwise. */
 inline float mis_weight(const SceneData* scene, const PathVertex* light_path, const PathVertex* camera_path,
                         const PathVertex* sampled, int s, int t) {
-    PathVertex qs, pt; /* the connection's endpoints */
-    if (s > 0) qs = light_path[s - 1];
-    if (t > 0) pt = camera_path[t - 1];
+    /* The connection's endpoints: t = 1 replaces the camera vertex and (otherwise) s = 1 the
+     * light vertex with the freshly sampled one; the subpath arrays are not read there (a path
+     * tracer has no light subpath at all). */
+    PathVertex qs, pt;
     if (t == 1) pt = *sampled;
-    else if (s == 1) qs = *sampled;
+    else if (t > 0) pt = camera_path[t - 1];
+    if (s == 1 && t != 1) qs = *sampled;
+    else if (s > 0) qs = light_path[s - 1];
     const PathVertex* qs_minus = s > 1 ? &light_path[s - 2] : 0;
     const PathVertex* pt_minus = t > 1 ? &camera_path[t - 2] : 0;
 

@@ -107,7 +107,7 @@ inline int random_walk(const SceneData* scene, Rng* rng, float3 o, float3 d, flo
 }
 
 /* Camera subpath through raster position `raster`: at most max_depth + 2 vertices (the camera,
- * max_depth scattering vertices and the emitter). */
+ * max_depth scattering vertices and the emitter); max_depth = -1 gives the camera vertex alone. */
 inline int generate_camera_subpath(const SceneData* scene, Rng* rng, float2 raster, int max_depth, PathVertex* path) {
     float3 o, d;
     float2 u_lens = rng_next2(rng);

@@ -8,21 +8,32 @@ For each scene the script
      The reference is rendered as --ref-chunks independent renders with distinct seeds and
      averaged, so its own noise (MSE of the reference, "ref_mse") can be estimated from the
      spread of the chunks;
-  2. renders every integrator (--integrators, default bdpt,pt,lt) at every time budget
+  2. renders every integrator (--integrators, default bdpt,pt,lt) with every sampler
+     (--samplers, default independent; clbdpt --sampler independent|sobol) at every time budget
      (--budgets, default 1,2,4,...,64 s) with --seeds seeds each; every run gets its own seed
-     (seed-base + 100*budget_index + seed_index), so all runs are statistically independent
+     (seed-base + 100*budget_index + seed_index + 10000*sampler_index), so all runs are
+     statistically independent
      (runs of one seed at growing budgets would otherwise share their first samples); the
-     (budget, seed) pairs run in a shuffled order (--order) with the integrators interleaved,
+     (budget, seed) pairs run in a shuffled order (--order) with the integrators and samplers
+     interleaved,
      so a drift of the machine's load does not tilt one integrator or the fitted slopes;
   3. measures, against the reference, for each run: RMSE (all pixels and channels, linear),
      relMSE = mean((x-ref)^2 / (ref^2 + 0.01)), per-channel mean bias mean(x - ref), and
      efficiency 1 / (MSE * seconds), with seconds = the "seconds" the render's stats JSON
      reports (not the requested budget: renders stop after whole passes and overshoot);
   4. writes <out>/<scene>_runs.csv (one row per run), <out>/<scene>.png (log-log RMSE vs
-     seconds and efficiency vs seconds), <out>/summary.csv and <out>/summary.md (per scene and
-     integrator: samples/s, Mrays/s, RMSE at 10 s interpolated in log-log, fitted slope of
-     log RMSE over log seconds, pooled per-channel bias with standard error), and prints the
-     markdown to stdout.
+     seconds and efficiency vs seconds, one line per integrator and sampler, sobol dashed),
+     <out>/summary.csv and <out>/summary.md (per scene, integrator and sampler: samples/s,
+     Mrays/s, RMSE at 10 s interpolated in log-log -- or at the largest budget when the runs
+     do not reach 10 s --, fitted slopes of log RMSE over log seconds and over log spp, pooled
+     per-channel bias with standard error, and the QMC gain RMSE(independent) / RMSE(sobol)
+     at equal time), and prints the markdown to stdout.
+
+The QMC gain compares the two samplers at equal render time: both per-budget curves
+(seed-averaged MSE vs geometric-mean seconds) are interpolated piecewise-linearly in log-log
+at T = 10 s, or at the largest time both curves reach if that is under 10 s, and the gain is
+RMSE_independent(T) / RMSE_sobol(T) (> 1: Sobol is better; its square is the equal-time MSE
+ratio). It is given raw and with the reference's own MSE subtracted from both.
 
 An unbiased, consistent estimator gives a slope of about -0.5; a flatter slope means bias
 (error that does not shrink with time) or a noisy reference (the measured MSE is the true MSE
@@ -43,6 +54,8 @@ Examples:
       --ref-spp 1024
   /usr/bin/python3 scripts/convergence.py all                          # every bundled scene
   /usr/bin/python3 scripts/convergence.py scenes/sky/sky.json --reference my_ref.exr
+  /usr/bin/python3 scripts/convergence.py all --samplers independent,sobol --film-scale 0.5 \\
+      --budgets 1,2,4 --seeds 2 --ref-time 100
 """
 
 import argparse
@@ -64,6 +77,9 @@ import numpy as np
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 BUNDLED = ["cornell-box", "cornell-specular", "lamp-ceiling", "veach-mis", "point-spot", "sky"]
 INTEGRATORS = ["bdpt", "pt", "lt"]
+SAMPLERS = ["independent", "sobol"]
+LINESTYLES = {"independent": "-", "sobol": "--"}
+MARKERS = {"independent": "o", "sobol": "s"}
 COLORS = {"bdpt": "tab:blue", "pt": "tab:orange", "lt": "tab:green"}
 REF_SEED_BASE = 1_000_000  # reference chunks never share a seed with a measured run
 NOISE_NOTE = ("Timings are wall-clock on a shared machine (load average recorded per run); "
@@ -172,10 +188,12 @@ class Renderer:
             self.version = "unknown"
         self.device, self.width, self.height, self.max_depth = device, width, height, max_depth
 
-    def render(self, scene, integrator, out_exr, seed, spp=None, seconds=None):
+    def render(self, scene, integrator, out_exr, seed, spp=None, seconds=None, sampler=None):
         stats = out_exr[:-4] + ".json"
         cmd = [self.binary, "render", scene, "--integrator", integrator, "--seed", str(seed),
                "-o", out_exr, "--stats", stats]
+        if sampler is not None:
+            cmd += ["--sampler", sampler]
         if seconds is not None:
             cmd += ["--time", repr(float(seconds))]
         else:
@@ -220,6 +238,8 @@ def reference_settings(args, renderer, scene):
         "height_override": args.height,
         "device": args.device,
     }
+    if args.ref_sampler != "independent":       # keeps the cache keys of older references
+        settings["sampler"] = args.ref_sampler
 
 
 def get_reference(args, renderer, scene, name):
@@ -266,10 +286,10 @@ def get_reference(args, renderer, scene, name):
             + (f"{args.ref_time / k:.0f} s" if args.ref_time else f"{args.ref_spp // k} spp"))
         if args.ref_time:
             st = renderer.render(scene, settings["integrator"], out, REF_SEED_BASE + i,
-                                 seconds=args.ref_time / k)
+                                 seconds=args.ref_time / k, sampler=args.ref_sampler)
         else:
             st = renderer.render(scene, settings["integrator"], out, REF_SEED_BASE + i,
-                                 spp=max(1, args.ref_spp // k))
+                                 spp=max(1, args.ref_spp // k), sampler=args.ref_sampler)
         chunks.append(read_exr(out))
         stats.append(st)
     spp = np.array([s["spp"] for s in stats], dtype=np.float64)
@@ -280,6 +300,7 @@ def get_reference(args, renderer, scene, name):
     info = dict(settings)
     info.update({
         "spp": int(spp.sum()),
+        "sampler": args.ref_sampler,
         "chunk_spp": [int(s) for s in spp],
         "chunk_seeds": [REF_SEED_BASE + i for i in range(k)],
         "seconds": float(sum(s["seconds"] for s in stats)),
@@ -384,6 +405,39 @@ def aggregate(rows):
     return pts
 
 
+def at_time(pts, t, value=lambda p: p[1]):
+    """value(point) at t seconds, piecewise-linear in log-log between the per-budget points;
+    nan outside their range."""
+    xs = np.array([p[0] for p in pts], float)
+    ys = np.array([value(p) for p in pts], float)
+    ok = np.isfinite(ys) & (ys > 0)
+    xs, ys = xs[ok], ys[ok]
+    if not len(xs) or not (xs.min() <= t <= xs.max()):
+        return float("nan")
+    o = np.argsort(xs)
+    return float(np.exp(np.interp(math.log(t), np.log(xs[o]), np.log(ys[o]))))
+
+
+def qmc_gain(pts_ind, pts_sob, ref_mse, t=10.0):
+    """Equal-time RMSE ratio independent / sobol at t seconds, or at the largest time both
+    per-budget curves reach when that is below t. Returns (gain, gain with the reference's MSE
+    subtracted from both, the time used)."""
+    if not pts_ind or not pts_sob:
+        return float("nan"), float("nan"), float("nan")
+    lo = max(min(p[0] for p in pts_ind), min(p[0] for p in pts_sob))
+    hi = min(max(p[0] for p in pts_ind), max(p[0] for p in pts_sob))
+    if hi < lo:
+        return float("nan"), float("nan"), float("nan")
+    tt = min(t, hi) if t >= lo else lo
+    raw = at_time(pts_ind, tt) / at_time(pts_sob, tt)
+
+    def sub(p):
+        m = p[1] ** 2 - ref_mse
+        return math.sqrt(m) if m > 0 else float("nan")
+    corr = at_time(pts_ind, tt, sub) / at_time(pts_sob, tt, sub)
+    return raw, corr, tt
+
+
 def rmse_at(pts, t, slope, intercept):
     """RMSE at t seconds: piecewise-linear in log-log between the per-budget points; outside
     their range, the fitted line (flagged as extrapolated)."""
@@ -442,7 +496,23 @@ def resolve_scene(s):
     return os.path.abspath(s), os.path.splitext(os.path.basename(s))[0]
 
 
+def film_size(scene):
+    try:
+        with open(scene) as f:
+            film = json.load(f).get("film", {})
+        return int(film["width"]), int(film["height"])
+    except Exception:  # noqa: BLE001
+        return None
+
+
 def run_scene(args, renderer, scene, name, work):
+    if args.film_scale:
+        wh = film_size(scene)
+        if wh is None:
+            raise RuntimeError(f"--film-scale: cannot read the film size of {scene}")
+        args.width = renderer.width = max(1, round(wh[0] * args.film_scale))
+        args.height = renderer.height = max(1, round(wh[1] * args.film_scale))
+        log(f"[{name}] film {wh[0]}x{wh[1]} scaled to {args.width}x{args.height}")
     ref, ref_info = get_reference(args, renderer, scene, name)
     ref_mse = ref_info.get("ref_mse", 0.0)
     ref_mse = 0.0 if not math.isfinite(ref_mse) else ref_mse
@@ -453,32 +523,40 @@ def run_scene(args, renderer, scene, name, work):
     run_dir = os.path.join(work, name)
     os.makedirs(run_dir, exist_ok=True)
     for integ in args.integrators:                 # warm-up: kernel build into the cache
-        st = renderer.render(scene, integ, os.path.join(run_dir, f"warmup-{integ}.exr"), 0,
-                             spp=1)
-        log(f"[{name}] warm-up {integ}: kernel "
-            f"{'cached' if st.get('kernel_from_cache') else 'built'} "
-            f"{st.get('kernel_build_seconds', float('nan')):.2f} s")
+        for smp in args.samplers:
+            st = renderer.render(scene, integ,
+                                 os.path.join(run_dir, f"warmup-{integ}-{smp}.exr"), 0, spp=1,
+                                 sampler=smp)
+            log(f"[{name}] warm-up {integ}/{smp}: kernel "
+                f"{'cached' if st.get('kernel_from_cache') else 'built'} "
+                f"{st.get('kernel_build_seconds', float('nan')):.2f} s")
 
     rows = []
-    n_total = len(args.integrators) * len(args.budgets) * args.seeds
+    budgets = args.scene_budgets.get(name, args.budgets)
+    n_total = len(args.integrators) * len(args.samplers) * len(budgets) * args.seeds
     k = 0
     # Interleave integrators inside each (budget, seed) so that slow phases of the machine
     # (someone else's build) hit all integrators alike rather than one of them, and (by
     # default) visit the (budget, seed) pairs in a shuffled order so that a drift of the
     # machine's load during the study does not correlate with the budget (which would tilt the
     # fitted slopes over seconds).
-    tasks = [(bi, budget, j) for bi, budget in enumerate(args.budgets) for j in range(args.seeds)]
+    tasks = [(bi, budget, j) for bi, budget in enumerate(budgets) for j in range(args.seeds)]
     if args.order == "shuffled":
         random.Random(args.seed_base).shuffle(tasks)
-    for bi, budget, j in tasks:
-        seed = args.seed_base + 100 * bi + j
-        for integ in args.integrators:
+    combos = [(integ, si, smp) for integ in args.integrators
+              for si, smp in enumerate(args.samplers)]
+    for ti, (bi, budget, j) in enumerate(tasks):
+        # alternate which sampler goes first, so neither always runs right after the other
+        order = combos if ti % 2 == 0 else [c for c in combos[::-1]]
+        for integ, si, smp in order:
+            seed = args.seed_base + 100 * bi + j + 10000 * si
             k += 1
-            out = os.path.join(run_dir, f"{integ}-t{budget:g}-s{seed}.exr")
-            st = renderer.render(scene, integ, out, seed, seconds=budget)
+            out = os.path.join(run_dir, f"{integ}-{smp}-t{budget:g}-s{seed}.exr")
+            st = renderer.render(scene, integ, out, seed, seconds=budget, sampler=smp)
             img = read_exr(out)
             mse, rel, bias = metrics(img, ref)
-            row = {"scene": name, "integrator": integ, "budget": budget, "seed": seed,
+            row = {"scene": name, "integrator": integ, "sampler": smp, "budget": budget,
+                   "seed": seed,
                    "spp": st["spp"], "seconds": st["seconds"],
                    "wall_seconds": st["_wall_seconds"], "load_before": st["_load_before"],
                    "samples_per_second": st["samples_per_second"],
@@ -490,7 +568,7 @@ def run_scene(args, renderer, scene, name, work):
                    "relmse": rel, "efficiency": 1.0 / (mse * st["seconds"]) if mse > 0 else
                    float("inf"), "bias": bias}
             rows.append(row)
-            log(f"[{name}] {k}/{n_total} {integ:4s} budget {budget:g}s seed {seed}: "
+            log(f"[{name}] {k}/{n_total} {integ:4s} {smp:11s} budget {budget:g}s seed {seed}: "
                 f"{st['spp']} spp in {st['seconds']:.2f} s, RMSE {row['rmse']:.4g}, "
                 f"relMSE {rel:.4g} (load {row['load_before']:.1f})")
             if not args.keep_images:
@@ -504,7 +582,7 @@ def run_scene(args, renderer, scene, name, work):
 
 
 def write_runs_csv(path, rows):
-    cols = ["scene", "integrator", "budget", "seed", "spp", "seconds", "wall_seconds",
+    cols = ["scene", "integrator", "sampler", "budget", "seed", "spp", "seconds", "wall_seconds",
             "load_before", "samples_per_second", "rays_per_second", "kernel_build_seconds",
             "rmse", "rmse_minus_ref", "mse", "relmse", "efficiency",
             "bias_r", "bias_g", "bias_b"]
@@ -523,14 +601,14 @@ def write_bias_csv(path, name, summary):
     with the reference's), z = bias / SE, and the seed count (SE has seeds - 1 dof)."""
     with open(path, "w", newline="") as f:
         w = csv.writer(f)
-        w.writerow(["scene", "integrator", "budget", "seeds", "bias_r", "bias_g", "bias_b",
+        w.writerow(["scene", "integrator", "sampler", "budget", "seeds", "bias_r", "bias_g", "bias_b",
                     "se_r", "se_g", "se_b", "z_r", "z_g", "z_b"])
         for integ, d in summary["integrators"].items():
-            w.writerow([name, integ, "pooled", d["runs"]] + [fmt(v) for v in d["bias"]] +
+            w.writerow([name, d["integrator"], d["sampler"], "pooled", d["runs"]] + [fmt(v) for v in d["bias"]] +
                        [fmt(v) for v in d["bias_se"]] + [fmt(v) for v in d["bias_z"]])
             for b, (m, se, n) in d["per_budget_bias"].items():
                 z = [mm / ss if ss > 0 else float("nan") for mm, ss in zip(m, se)]
-                w.writerow([name, integ, b, n] + [fmt(v) for v in m] + [fmt(v) for v in se] +
+                w.writerow([name, d["integrator"], d["sampler"], b, n] + [fmt(v) for v in m] + [fmt(v) for v in se] +
                            [fmt(v) for v in z])
     log(f"wrote {path}")
 
@@ -555,9 +633,13 @@ def fmt(v):
 
 
 def summarize(args, name, rows, ref_info, ref_mse, ref_se):
-    out = {"scene": name, "ref": ref_info, "ref_mse": ref_mse, "integrators": {}}
-    for integ in args.integrators:
-        rs = [r for r in rows if r["integrator"] == integ]
+    out = {"scene": name, "ref": ref_info, "ref_mse": ref_mse, "integrators": {},
+           "width": args.width, "height": args.height,
+           "loads": [r["load_before"] for r in rows]}
+    for integ, smp in [(i, m) for i in args.integrators for m in args.samplers]:
+        rs = [r for r in rows if r["integrator"] == integ and r["sampler"] == smp]
+        if not rs:
+            continue
         secs = [r["seconds"] for r in rs]
         slope, slope_se, icpt = fit_slope(secs, [r["rmse"] for r in rs])
         corr = [(r["seconds"], math.sqrt(r["mse"] - ref_mse)) for r in rs if r["mse"] > ref_mse]
@@ -569,8 +651,19 @@ def summarize(args, name, rows, ref_info, ref_mse, ref_se):
                                                    [c[1] for c in corr_spp])
         pts = aggregate(rs)
         r10, extrap = rmse_at(pts, 10.0, slope, icpt)
+        # the value reported in the table: interpolated at 10 s, or (10 s not reached) the
+        # per-budget point of the largest budget, never an extrapolation
+        if not extrap:
+            r_rep, t_rep = r10, 10.0
+        else:
+            last = max(pts, key=lambda p: p[0])
+            r_rep, t_rep = last[1], last[0]
         bmean, bse = pooled_bias(rs, ref_se)
-        out["integrators"][integ] = {
+        out["integrators"][f"{integ}/{smp}"] = {
+            "integrator": integ, "sampler": smp,
+            "rmse_report": r_rep, "rmse_report_seconds": t_rep,
+            "qmc_gain": float("nan"), "qmc_gain_minus_ref": float("nan"),
+            "qmc_gain_seconds": float("nan"),
             "samples_per_second": sum(r["samples"] or r["samples_per_second"] * r["seconds"]
                                       for r in rs) / sum(secs),
             "rays_per_second": sum(r["rays"] or r["rays_per_second"] * r["seconds"]
@@ -581,7 +674,7 @@ def summarize(args, name, rows, ref_info, ref_mse, ref_se):
             "slope_spp_minus_ref": slope_spp_c, "slope_spp_minus_ref_se": slope_spp_c_se,
             "rmse_10s": r10, "rmse_10s_extrapolated": extrap,
             "relmse_last": float(np.mean([r["relmse"] for r in rs
-                                          if r["budget"] == max(args.budgets)])),
+                                          if r["budget"] == max(x["budget"] for x in rs)])),
             "points": pts,
             "bias": [float(v) for v in bmean], "bias_se": [float(v) for v in bse],
             "bias_z": [float(m / s) if s > 0 else float("nan") for m, s in zip(bmean, bse)],
@@ -589,6 +682,13 @@ def summarize(args, name, rows, ref_info, ref_mse, ref_se):
                                 for b, (m, s, n) in per_budget_bias(rs, ref_se).items()},
             "runs": len(rs),
         }
+    for integ in args.integrators:
+        ind = out["integrators"].get(f"{integ}/independent")
+        sob = out["integrators"].get(f"{integ}/sobol")
+        if ind and sob:
+            g, gc, tg = qmc_gain(ind["points"], sob["points"], ref_mse)
+            for d in (ind, sob):
+                d["qmc_gain"], d["qmc_gain_minus_ref"], d["qmc_gain_seconds"] = g, gc, tg
     return out
 
 
@@ -596,20 +696,23 @@ def plot(path, name, rows, summary, ref_info, ref_mse):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(12, 5))
-    for integ, s in summary["integrators"].items():
-        rs = [r for r in rows if r["integrator"] == integ]
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(13, 5.5))
+    for key, s in summary["integrators"].items():
+        integ, smp = s["integrator"], s["sampler"]
+        rs = [r for r in rows if r["integrator"] == integ and r["sampler"] == smp]
         c = COLORS.get(integ)
+        ls, mk = LINESTYLES.get(smp, ":"), MARKERS.get(smp, "^")
         ax1.scatter([r["seconds"] for r in rs], [r["rmse"] for r in rs], s=12, color=c,
-                    alpha=0.6)
+                    alpha=0.5, marker=mk)
         pts = s["points"]
-        ax1.plot([p[0] for p in pts], [p[1] for p in pts], "-o", color=c, ms=4,
-                 label=f"{integ}: slope {s['slope']:+.3f} (vs spp, ref noise "
+        ax1.plot([p[0] for p in pts], [p[1] for p in pts], ls, marker=mk, color=c, ms=4,
+                 label=f"{key}: slope {s['slope']:+.3f} (vs spp, ref noise "
                        f"subtracted {s['slope_spp_minus_ref']:+.3f})")
         ax2.scatter([r["seconds"] for r in rs], [r["efficiency"] for r in rs], s=12, color=c,
-                    alpha=0.6)
-        ax2.plot([p[0] for p in pts], [1.0 / p[2] for p in pts], "-o", color=c, ms=4,
-                 label=integ)
+                    alpha=0.5, marker=mk)
+        ax2.plot([p[0] for p in pts], [1.0 / p[2] for p in pts], ls, marker=mk, color=c, ms=4,
+                 label=key + (f" (QMC gain {s['qmc_gain']:.2f} at {s['qmc_gain_seconds']:.1f} s)"
+                              if smp == "sobol" and math.isfinite(s["qmc_gain"]) else ""))
     xs = [r["seconds"] for r in rows]
     if xs:
         x0, x1 = min(xs), max(xs)
@@ -625,12 +728,13 @@ def plot(path, name, rows, summary, ref_info, ref_mse):
         ax.set_xscale("log")
         ax.set_xlabel("render seconds (as reported by clbdpt --stats)")
         ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=8, loc="best")
+        ax.legend(fontsize=7, loc="best")
     ax1.set_yscale("log")
     ax2.set_yscale("log")
     ax1.set_ylabel("RMSE vs reference (linear RGB)")
     ax2.set_ylabel("efficiency 1 / (MSE · seconds)")
-    ax1.set_title(f"{name}: RMSE vs time")
+    ax1.set_title(f"{name} ({summary.get('width')}x{summary.get('height')}): RMSE vs time "
+                  "(sobol dashed)")
     ax2.set_title(f"{name}: efficiency (higher is better)")
     fig.text(0.5, 0.005, "Timings noisy: small shared machine (load avg "
              f"{min(r['load_before'] for r in rows):.1f}–{max(r['load_before'] for r in rows):.1f}"
@@ -655,24 +759,53 @@ def markdown(args, summaries, renderer):
              f"sha256 {renderer.sha256[:12]} (repo {git_head()[:12]}"
              f"{'+dirty' if git_head().endswith('+dirty') else ''}), "
              f"{os.cpu_count()} CPU cores.")
-    L.append(f"Budgets {', '.join(f'{b:g}' for b in args.budgets)} s × {args.seeds} seeds; "
-             "x values are the seconds each render reports.")
+    over = "".join(f" ({n}: {', '.join(f'{b:g}' for b in v)} s)"
+                   for n, v in args.scene_budgets.items())
+    L.append(f"Budgets {', '.join(f'{b:g}' for b in args.budgets)} s{over} × {args.seeds} seeds × "
+             f"samplers {', '.join(args.samplers)}; x values are the seconds each render "
+             "reports. Film: " + ", ".join(f"{s['scene']} {s.get('width') or 'scene'}x"
+                                           f"{s.get('height') or 'scene'}" for s in summaries)
+             + ".")
+    loads = [v for s in summaries for v in s.get("loads", [])]
+    if loads:
+        L.append(f"Machine load (1-min load average before each run): median "
+                 f"{float(np.median(loads)):.2f}, range {min(loads):.2f}–{max(loads):.2f} "
+                 f"on {os.cpu_count()} cores.")
     L.append("")
     L.append(f"**{NOISE_NOTE}**")
     L.append("")
-    L.append("| scene | integrator | k samples/s | Mrays/s | RMSE at 10 s | slope (log RMSE / log s) "
-             "| same, reference noise subtracted | slope over log spp, reference noise subtracted |")
-    L.append("|---|---|---:|---:|---:|---:|---:|---:|")
+    L.append("| scene | integrator | sampler | k samples/s | Mrays/s | RMSE at 10 s | "
+             "slope over log time (ref noise subtracted) | slope over log spp (ref noise "
+             "subtracted) | QMC gain (ref noise subtracted) |")
+    L.append("|---|---|---|---:|---:|---:|---:|---:|---:|")
     for s in summaries:
-        for integ, d in s["integrators"].items():
-            r10 = f"{d['rmse_10s']:.4g}" + ("*" if d["rmse_10s_extrapolated"] else "")
-            L.append(f"| {s['scene']} | {integ} | {d['samples_per_second'] / 1e3:.1f} | "
+        for key, d in s["integrators"].items():
+            if d["rmse_report_seconds"] == 10.0:
+                r10 = f"{d['rmse_report']:.4g}"
+            else:
+                r10 = f"{d['rmse_report']:.4g} (at {d['rmse_report_seconds']:.1f} s)†"
+            if d["sampler"] == "sobol" and math.isfinite(d["qmc_gain"]):
+                g = (f"{d['qmc_gain']:.2f} ({d['qmc_gain_minus_ref']:.2f})"
+                     + ("" if d["qmc_gain_seconds"] == 10.0 else
+                        f" at {d['qmc_gain_seconds']:.1f} s"))
+            else:
+                g = ""
+            L.append(f"| {s['scene']} | {d['integrator']} | {d['sampler']} | "
+                     f"{d['samples_per_second'] / 1e3:.1f} | "
                      f"{d['rays_per_second'] / 1e6:.3g} | {r10} | "
-                     f"{d['slope']:+.3f} ± {d['slope_se']:.3f} | "
-                     f"{d['slope_minus_ref']:+.3f} ± {d['slope_minus_ref_se']:.3f} | "
-                     f"{d['slope_spp_minus_ref']:+.3f} ± {d['slope_spp_minus_ref_se']:.3f} |")
+                     f"{d['slope']:+.3f} ± {d['slope_se']:.3f} ({d['slope_minus_ref']:+.3f}) | "
+                     f"{d['slope_spp']:+.3f} ± {d['slope_spp_se']:.3f} "
+                     f"({d['slope_spp_minus_ref']:+.3f}) | {g} |")
     L.append("")
-    L.append("`*` = outside the measured time range: extrapolated along the fitted line. "
+    L.append("k samples/s = thousand camera samples (one per pixel per pass) per second; Mrays/s "
+             "from clbdpt's counters; both pooled over all runs (total / total seconds). "
+             "RMSE at 10 s: seed-averaged MSE per budget, interpolated piecewise-linearly in "
+             "log-log; † = the runs do not reach 10 s, so the value is the largest budget's "
+             "point at the stated (mean reported) seconds — not an extrapolation. "
+             "QMC gain = RMSE(independent) / RMSE(sobol) at equal render time, both curves "
+             "interpolated in log-log at 10 s or, where stated, at the largest time both reach "
+             "(> 1: Sobol better; gain² = equal-time MSE ratio); in parentheses with the "
+             "reference's MSE subtracted from both, which the raw ratio pulls towards 1. "
              "Slope ± its least-squares standard error over all runs (each seed a point). "
              "'Reference noise subtracted': fitted to sqrt(MSE − reference MSE), since the "
              "measured MSE is the run's MSE plus the reference's own (estimated from its "
@@ -686,25 +819,25 @@ def markdown(args, summaries, renderer):
     for s in summaries:
         ri = s["ref"]
         L.append(f"**{s['scene']}**: reference `{ri.get('source')}` — "
-                 f"{ri.get('integrator', 'user-supplied')}, {ri.get('spp', '?')} spp "
+                 f"{ri.get('integrator', 'user-supplied')} "
+                 f"({ri.get('sampler', 'independent')} sampler), {ri.get('spp', '?')} spp "
                  f"({ri.get('chunks', '?')} independent chunks), max depth "
                  f"{ri.get('max_depth', '?')}, {ri.get('seconds', float('nan')):.0f} s; "
                  f"estimated reference RMSE {math.sqrt(s['ref_mse']):.3g} "
                  f"(adds {s['ref_mse']:.3g} to every run's MSE)."
                  + (f" **{ri['warning']}**" if ri.get("warning") else ""))
         L.append("")
-        L.append("| integrator | runs | mean bias R ± SE | G ± SE | B ± SE | max abs z | "
-                 "relMSE at largest budget |")
-        L.append("|---|---:|---:|---:|---:|---:|---:|")
-        for integ, d in s["integrators"].items():
-            cells = [f"{m:+.2e} ± {e:.1e}" for m, e in zip(d["bias"], d["bias_se"])]
+        for key, d in s["integrators"].items():
+            cells = [f"{ch} {m:+.2e} ± {e:.1e}" for ch, m, e in zip("RGB", d["bias"],
+                                                                    d["bias_se"])]
             z = max(abs(v) for v in d["bias_z"])
             flag = " **(>3 SE)**" if z > 3 else ""
-            L.append(f"| {integ} | {d['runs']} | " + " | ".join(cells) +
-                     f" | {z:.2f}{flag} | {d['relmse_last']:.3g} |")
+            L.append(f"- {key} ({d['runs']} runs): mean bias " + ", ".join(cells) +
+                     f"; max |z| {z:.2f}{flag}; relMSE at the largest budget "
+                     f"{d['relmse_last']:.3g}")
         L.append("")
         L.append("Bias = mean over pixels of (image − reference) per channel, pooled over all "
-                 "runs of the integrator with weights spp (each run has its own seed); SE from "
+                 "runs of the integrator and sampler with weights spp (each run has its own seed); SE from "
                  "the scatter of the runs combined with the reference's own SE. Per budget "
                  "(mean over seeds, SE across seeds) in <scene>_bias.csv next to this file.")
         L.append("")
@@ -798,9 +931,19 @@ def main(argv=None):
                     help="only make sure the reference exists, then stop")
     ap.add_argument("--integrators", default=",".join(INTEGRATORS),
                     help="comma-separated strategy sets to measure (default bdpt,pt,lt)")
+    ap.add_argument("--samplers", default="independent",
+                    help="comma-separated clbdpt samplers (independent, sobol); every "
+                         "(integrator, budget, seed) run is repeated for each (default "
+                         "independent). With both, the summary gives the QMC gain "
+                         "RMSE(independent) / RMSE(sobol) at equal time")
+    ap.add_argument("--ref-sampler", default="independent", choices=SAMPLERS,
+                    help="sampler of the rendered reference (default independent)")
     ap.add_argument("--budgets", type=parse_budgets, default=None,
                     help="comma-separated time budgets in seconds "
                          "(default 1,2,4,8,16,32,64; --quick: 0.5,1,2)")
+    ap.add_argument("--scene-budgets", action="append", default=[], metavar="SCENE=LIST",
+                    help="budgets for one scene (by name), replacing --budgets there, e.g. "
+                         "cornell-box=1,2,4,8,16; repeatable")
     ap.add_argument("--seeds", type=int, default=None,
                     help="renders per integrator and budget, each with its own seed "
                          "(default 3; --quick: 2)")
@@ -811,6 +954,10 @@ def main(argv=None):
                          "load drift from budget) or ascending budgets")
     ap.add_argument("--max-depth", type=int, default=None,
                     help="pass --max-depth to every render (default: the scene's)")
+    ap.add_argument("--film-scale", type=float, default=None,
+                    help="scale each scene's own film size (its JSON 'film') by this factor, "
+                         "keeping the aspect (e.g. 0.5: 256x256 -> 128x128, 384x256 -> "
+                         "192x128); overrides --width/--height")
     ap.add_argument("--width", type=int, default=None, help="film width override")
     ap.add_argument("--height", type=int, default=None, help="film height override")
     ap.add_argument("--device", default=None, help="clbdpt --device SPEC")
@@ -845,6 +992,24 @@ def main(argv=None):
     for i in args.integrators:
         if i not in INTEGRATORS:
             ap.error(f"unknown integrator {i!r}")
+    sb = {}
+    for item in args.scene_budgets:
+        if "=" not in item:
+            ap.error(f"--scene-budgets wants SCENE=LIST, got {item!r}")
+        n, v = item.split("=", 1)
+        try:
+            sb[n.strip()] = parse_budgets(v)
+        except argparse.ArgumentTypeError as e:
+            ap.error(str(e))
+    args.scene_budgets = sb
+    args.samplers = [m.strip() for m in args.samplers.split(",") if m.strip()]
+    if not args.samplers:
+        ap.error("--samplers is empty")
+    for m in args.samplers:
+        if m not in SAMPLERS:
+            ap.error(f"unknown sampler {m!r} (choose from {', '.join(SAMPLERS)})")
+    if args.film_scale is not None and args.film_scale <= 0:
+        ap.error("--film-scale must be positive")
     if args.ref_chunks < 1:
         ap.error("--ref-chunks must be >= 1")
     if args.seeds < 1:
@@ -894,7 +1059,7 @@ def main(argv=None):
             print("slopes (log RMSE over log seconds; unbiased ≈ -0.5):")
             for s in summaries:
                 for integ, d in s["integrators"].items():
-                    print(f"  {s['scene']:18s} {integ:4s} {d['slope']:+.3f} ± "
+                    print(f"  {s['scene']:18s} {integ:16s} {d['slope']:+.3f} ± "
                           f"{d['slope_se']:.3f}   (reference noise subtracted: "
                           f"{d['slope_minus_ref']:+.3f}; over log spp, subtracted: "
                           f"{d['slope_spp_minus_ref']:+.3f})")
@@ -910,8 +1075,9 @@ def main(argv=None):
 
 
 def write_summary_csv(path, summaries):
-    cols = ["scene", "integrator", "samples_per_second", "mrays_per_second", "rmse_10s",
-            "rmse_10s_extrapolated", "slope", "slope_se", "slope_minus_ref", "slope_spp",
+    cols = ["scene", "integrator", "sampler", "samples_per_second", "mrays_per_second",
+            "rmse_10s", "rmse_10s_extrapolated", "rmse_report", "rmse_report_seconds",
+            "qmc_gain", "qmc_gain_minus_ref", "qmc_gain_seconds", "slope", "slope_se", "slope_minus_ref", "slope_spp",
             "slope_spp_minus_ref", "bias_r", "bias_g",
             "bias_b", "bias_se_r", "bias_se_g", "bias_se_b", "ref_spp", "ref_rmse"]
     with open(path, "w", newline="") as f:
@@ -919,9 +1085,13 @@ def write_summary_csv(path, summaries):
         w.writerow(cols)
         for s in summaries:
             for integ, d in s["integrators"].items():
-                w.writerow([s["scene"], integ, fmt(d["samples_per_second"]),
+                w.writerow([s["scene"], d["integrator"], d["sampler"],
+                            fmt(d["samples_per_second"]),
                             fmt(d["rays_per_second"] / 1e6), fmt(d["rmse_10s"]),
-                            d["rmse_10s_extrapolated"], fmt(d["slope"]), fmt(d["slope_se"]),
+                            d["rmse_10s_extrapolated"], fmt(d["rmse_report"]),
+                            fmt(d["rmse_report_seconds"]), fmt(d["qmc_gain"]),
+                            fmt(d["qmc_gain_minus_ref"]), fmt(d["qmc_gain_seconds"]),
+                            fmt(d["slope"]), fmt(d["slope_se"]),
                             fmt(d["slope_minus_ref"]), fmt(d["slope_spp"]),
                             fmt(d["slope_spp_minus_ref"])] + [fmt(v) for v in d["bias"]] +
                            [fmt(v) for v in d["bias_se"]] +

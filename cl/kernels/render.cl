@@ -44,10 +44,22 @@ __kernel void render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, __global float
 
     PathVertex camera_path[MAX_DEPTH + 2];
     PathVertex light_path[MAX_DEPTH + 1];
+    /* Each strategy set traces only the subpaths it uses: a light tracer joins light vertices to
+     * freshly sampled lens points (t = 1), so its camera subpath is the camera vertex alone; a
+     * path tracer samples a fresh light point for s = 1 and needs no light subpath. */
+#if INTEGRATOR == INTEGRATOR_LT
+    int n_camera = generate_camera_subpath(&scene, &rng, raster, -1, camera_path);
+#else
     int n_camera = generate_camera_subpath(&scene, &rng, raster, MAX_DEPTH, camera_path);
+#endif
+#if INTEGRATOR == INTEGRATOR_PT
+    int n_light = 1; /* s = 0 and s = 1 only; light_path is never read */
+    int light_is_area = 0;
+#else
     Rng light_rng = rng_init_light_subpath((uint)pixel, (uint)(params.width * params.height), params.sample_index, params.seed);
     int n_light = generate_light_subpath(&scene, &light_rng, MAX_DEPTH, light_path);
     int light_is_area = n_light > 0 && lights[light_path[0].light].kind == LIGHT_AREA;
+#endif
 
     __global SplatRecord* my_splats = splats + (size_t)gid * SPLAT_SLOTS;
     for (int k = 0; k < SPLAT_SLOTS; ++k) my_splats[k].pixel = -1;
