@@ -2,6 +2,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <exception>
 #include <mutex>
 #include <thread>
@@ -48,21 +49,29 @@ Film render_image(const std::vector<Renderer*>& renderers, const RenderOptions& 
     };
     std::vector<std::thread> threads;
     for (size_t d = 0; d < renderers.size(); ++d) threads.emplace_back(worker, d);
-    std::atomic<bool> finished{false};
+    // The progress reporter waits on a condition variable, so the end of the render wakes it at
+    // once (a plain sleep would add up to one interval to every render's time).
+    std::mutex reporter_mutex;
+    std::condition_variable reporter_wake;
+    bool finished = false;
     std::thread reporter;
     if (options.progress) {
         reporter = std::thread([&] {
-            while (!finished) {
-                std::this_thread::sleep_for(kProgressInterval);
-                if (!finished) options.progress(passes_done, planned, seconds_since(start));
-            }
+            std::unique_lock<std::mutex> lock(reporter_mutex);
+            while (!reporter_wake.wait_for(lock, kProgressInterval, [&] { return finished; }))
+                options.progress(passes_done, planned, seconds_since(start));
         });
     }
     for (std::thread& t : threads) t.join();
-    finished = true;
+    const double seconds = seconds_since(start);
+    {
+        std::lock_guard<std::mutex> lock(reporter_mutex);
+        finished = true;
+    }
+    reporter_wake.notify_all();
     if (reporter.joinable()) reporter.join();
     if (failure) std::rethrow_exception(failure);
-    if (options.progress) options.progress(passes_done, planned, seconds_since(start));
+    if (options.progress) options.progress(passes_done, planned, seconds);
 
     Film film(camera.width, camera.height);
     RenderStats total;
@@ -73,7 +82,7 @@ Film render_image(const std::vector<Renderer*>& renderers, const RenderOptions& 
         total.add(renderers[d]->stats());
         total.program_from_cache = total.program_from_cache && renderers[d]->stats().program_from_cache;
     }
-    total.seconds = seconds_since(start);
+    total.seconds = seconds;
     if (stats) *stats = total;
     return film;
 }
