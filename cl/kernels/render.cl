@@ -1,8 +1,8 @@
 /* One BDPT sample per work item: a camera subpath through the item's pixel, a light subpath,
  * and every enabled (s, t) connection between them (seed ch. 4-5). Camera-side contributions
- * go to the item's own pixel (camera_out, whose w holds the number of rays the item traced); t = 1 contributions land elsewhere and are written
- * as splat records in fixed slots (s - 1), which the host adds in slot order, so the image
- * does not depend on the order the items ran in.
+ * go to the item's own pixel (camera_out, whose w holds the number of rays the item traced);
+ * t = 1 contributions land elsewhere and are written as splat records in fixed slots (s - 1),
+ * which the host adds in slot order, so the image does not depend on the order the items ran.
  *
  * Specialised per scene by -D flags (host/render/features.cpp): MAX_DEPTH, INTEGRATOR and
  * HAS_* for the light, material and camera features present. */
