@@ -2,6 +2,7 @@
 // way a scene or mesh file can be wrong (each must fail with file and line or key).
 #include <unistd.h>
 
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -358,6 +359,8 @@ struct BadJsonCase {
     const char* expected;
 };
 
+void PrintTo(const BadJsonCase& c, std::ostream* os) { *os << c.expected; }
+
 class SceneJsonErrors : public ::testing::TestWithParam<BadJsonCase> {};
 
 TEST_P(SceneJsonErrors, NameTheKey) {
@@ -411,7 +414,14 @@ INSTANTIATE_TEST_SUITE_P(
         BadJsonCase{R"({"film": {"width": 64}})", R"("meshes" is missing)"},
         BadJsonCase{R"({"meshes": []})", R"("meshes" must name at least one mesh)"},
         BadJsonCase{R"({"meshes": "a.obj"})", R"("meshes" must be an array)"},
-        BadJsonCase{R"([1, 2])", "must be a JSON object"}));
+        BadJsonCase{R"([1, 2])", "must be a JSON object"}),
+    [](const ::testing::TestParamInfo<BadJsonCase>& info) {
+        // The case's index and the error it expects, as an identifier.
+        std::string name = std::to_string(info.index) + "_";
+        for (char c : std::string(info.param.expected).substr(0, 40))
+            name += std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
+        return name;
+    });
 
 TEST(SceneJson, MissingEnvironmentMapNamesIt) {
     TempScene t(R"({"meshes": [)" + quoted_mesh("frame.obj") +
