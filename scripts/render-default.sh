@@ -5,6 +5,6 @@ set -euo pipefail
 here=$(pwd)
 root="$(cd "$(dirname "$0")/.." && pwd)"
 "$root/scripts/install-deps.sh"
-"$root/scripts/build.sh"
+"$root/scripts/build.sh" clbdpt
 cd "$here"
 "$root/${BUILD_DIR:-build}/clbdpt" render "$root/scenes/cornell-box/cornell-box.json" -o cornell-box.png "$@"
