@@ -31,30 +31,39 @@ DeviceScene small_scene(const std::string& name, int size) {
     return build_device_scene(scene, size, size);
 }
 
-TEST(Integrators, AgreeOnCornellBox) {
-    DeviceScene scene = small_scene("cornell-box", 48);
+// Renders the scene with one strategy set and sampler, each run with its own seed so that runs
+// are independent of each other.
+RegionStats render_with(const DeviceScene& scene, int max_depth, Integrator integrator, SamplerKind sampler,
+                        uint32_t seed) {
     RenderOptions options;
-    options.max_depth = 5;
-    options.seed = 1;
+    options.max_depth = max_depth;
+    options.integrator = integrator;
+    options.sampler = sampler;
+    options.seed = seed;
     const int passes = 96;
-    options.integrator = Integrator::Bdpt;
-    RegionStats bdpt = render_region_stats(scene, options, passes, 4);
-    options.integrator = Integrator::Pt;
-    options.seed = 2;
-    RegionStats pt = render_region_stats(scene, options, passes, 4);
-    options.integrator = Integrator::Lt;
-    options.seed = 3;
-    RegionStats lt = render_region_stats(scene, options, passes, 4);
-    // The Sobol sampler's passes are stratified, not independent: the spread of per-pass
-    // values overestimates the standard error of their mean, so this comparison is conservative.
-    options.integrator = Integrator::Bdpt;
-    options.sampler = SamplerKind::Sobol;
-    options.seed = 4;
-    RegionStats sobol = render_region_stats(scene, options, passes, 4);
+    return render_region_stats(scene, options, passes, 4);
+}
+
+// bdpt against pt and lt (independent sampler), and optionally against bdpt with Sobol.
+void expect_strategy_sets_agree(const DeviceScene& scene, int max_depth, uint32_t seed, bool with_sobol,
+                                const std::string& what) {
+    RegionStats bdpt = render_with(scene, max_depth, Integrator::Bdpt, SamplerKind::Independent, seed);
+    RegionStats pt = render_with(scene, max_depth, Integrator::Pt, SamplerKind::Independent, seed + 1);
+    RegionStats lt = render_with(scene, max_depth, Integrator::Lt, SamplerKind::Independent, seed + 2);
     ASSERT_GT(bdpt.image_mean, 0.01);
-    expect_agree(bdpt, pt, "bdpt vs pt");
-    expect_agree(bdpt, lt, "bdpt vs lt");
-    expect_agree(bdpt, sobol, "bdpt vs bdpt with the Sobol sampler");
+    expect_agree(bdpt, pt, (what + ": bdpt vs pt").c_str());
+    expect_agree(bdpt, lt, (what + ": bdpt vs lt").c_str());
+    if (with_sobol) {
+        // The Sobol sampler's passes are stratified, not independent: the spread of per-pass
+        // values overestimates the standard error of their mean, so this comparison is
+        // conservative.
+        RegionStats sobol = render_with(scene, max_depth, Integrator::Bdpt, SamplerKind::Sobol, seed + 3);
+        expect_agree(bdpt, sobol, (what + ": bdpt vs bdpt with the Sobol sampler").c_str());
+    }
+}
+
+TEST(Integrators, AgreeOnCornellBox) {
+    expect_strategy_sets_agree(small_scene("cornell-box", 48), 5, 1, true, "cornell-box");
 }
 
 // A thin-lens camera: t = 1 strategies sample lens points (camera_sample_wi), camera subpaths
@@ -63,22 +72,7 @@ TEST(Integrators, AgreeWithThinLens) {
     Scene loaded = load_scene(scene_path("cornell-box"));
     loaded.camera.lens_radius = 25.0f;
     loaded.camera.focus_distance = 700.0f;
-    DeviceScene scene = build_device_scene(loaded, 40, 40);
-    RenderOptions options;
-    options.max_depth = 4;
-    const int passes = 96;
-    options.integrator = Integrator::Bdpt;
-    options.seed = 11;
-    RegionStats bdpt = render_region_stats(scene, options, passes, 4);
-    options.integrator = Integrator::Pt;
-    options.seed = 12;
-    RegionStats pt = render_region_stats(scene, options, passes, 4);
-    options.integrator = Integrator::Lt;
-    options.seed = 13;
-    RegionStats lt = render_region_stats(scene, options, passes, 4);
-    ASSERT_GT(bdpt.image_mean, 0.01);
-    expect_agree(bdpt, pt, "thin lens: bdpt vs pt");
-    expect_agree(bdpt, lt, "thin lens: bdpt vs lt");
+    expect_strategy_sets_agree(build_device_scene(loaded, 40, 40), 4, 11, false, "thin lens");
 }
 
 class BatchingTest : public ::testing::TestWithParam<SamplerKind> {};
