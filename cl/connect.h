@@ -50,7 +50,7 @@ inline float3 connect_bdpt(const SceneData* scene, Rng* rng, const PathVertex* l
         const PathVertex* pt = &camera_path[t - 1];
         float u_light = rng_next(rng);
         float2 u = rng_next2(rng);
-        if (!vertex_is_connectible(scene, pt)) return L;
+        if (!vertex_is_connectible(scene, pt) || scene->info.light_count == 0) return L;
         float select_pdf;
         int light = sample_light_index(scene, u_light, &select_pdf);
         LightSample ls;
