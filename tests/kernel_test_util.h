@@ -128,27 +128,10 @@ inline Material make_material(int kind, D3 kd, D3 ks = {}, D3 ke = {}, float alp
     return m;
 }
 
-inline int add_material(Scene& scene, const Material& m) {
-    scene.materials.push_back(m);
-    scene.material_names.push_back("m" + std::to_string(scene.materials.size() - 1));
-    return int(scene.materials.size()) - 1;
-}
+inline int add_material(Scene& scene, const Material& m) { return add_scene_material(scene, m); }
 
 inline void add_triangle(Scene& scene, D3 p0, D3 p1, D3 p2, int material) {
-    Triangle t{};
-    t.p0 = f4(p0);
-    t.p1 = f4(p1);
-    t.p2 = f4(p2);
-    TriangleInfo info{};
-    info.material = material;
-    info.light = -1;
-    info.normals = -1;
-    info.source_index = int(scene.triangles.size());
-    scene.triangles.push_back(t);
-    scene.infos.push_back(info);
-    scene.bounds.extend(v3(p0));
-    scene.bounds.extend(v3(p1));
-    scene.bounds.extend(v3(p2));
+    add_scene_triangle(scene, v3(p0), v3(p1), v3(p2), material);
 }
 
 // Quad p0 p1 p2 p3 (counter-clockwise seen from the front) as two triangles.

@@ -19,6 +19,40 @@ inline DeviceContext& test_device() {
     return device;
 }
 
+// Appends a material to a hand-built scene; returns its index.
+inline int add_scene_material(Scene& scene, const Material& m, const std::string& name = "") {
+    scene.materials.push_back(m);
+    scene.material_names.push_back(name.empty() ? "m" + std::to_string(scene.materials.size() - 1) : name);
+    return int(scene.materials.size()) - 1;
+}
+
+// Appends a triangle to a hand-built scene. Front face (the emitting one, the outside of
+// glass) = counter-clockwise seen from it: normal = normalize(cross(b - a, c - a)).
+inline void add_scene_triangle(Scene& scene, Vec3 a, Vec3 b, Vec3 c, int material) {
+    auto corner = [](Vec3 v) {
+        cl_float4 r;
+        r.s[0] = v.x;
+        r.s[1] = v.y;
+        r.s[2] = v.z;
+        r.s[3] = 0.0f;
+        return r;
+    };
+    Triangle t{};
+    t.p0 = corner(a);
+    t.p1 = corner(b);
+    t.p2 = corner(c);
+    TriangleInfo info{};
+    info.material = material;
+    info.light = -1;
+    info.normals = -1;
+    info.source_index = int(scene.triangles.size());
+    scene.triangles.push_back(t);
+    scene.infos.push_back(info);
+    scene.bounds.extend(a);
+    scene.bounds.extend(b);
+    scene.bounds.extend(c);
+}
+
 inline std::string scene_path(const std::string& name) {
     return std::string(CLBDPT_SCENES_DIR) + "/" + name + "/" + name + ".json";
 }

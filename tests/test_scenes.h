@@ -85,30 +85,10 @@ inline Material glass_material(float ior) {
 struct SceneBuilder {
     Scene scene;
 
-    int material(const Material& m, const std::string& name = "") {
-        scene.materials.push_back(m);
-        scene.material_names.push_back(name.empty() ? "m" + std::to_string(scene.materials.size() - 1) : name);
-        return int(scene.materials.size()) - 1;
-    }
+    int material(const Material& m, const std::string& name = "") { return add_scene_material(scene, m, name); }
 
-    // Front face (the emitting one, the outside of glass) = counter-clockwise seen from it:
-    // normal = normalize(cross(b - a, c - a)).
-    void triangle(Vec3 a, Vec3 b, Vec3 c, int material) {
-        Triangle t;
-        t.p0 = float4_of(a);
-        t.p1 = float4_of(b);
-        t.p2 = float4_of(c);
-        TriangleInfo info{};
-        info.material = material;
-        info.light = -1;
-        info.normals = -1;
-        info.source_index = int(scene.triangles.size());
-        scene.triangles.push_back(t);
-        scene.infos.push_back(info);
-        scene.bounds.extend(a);
-        scene.bounds.extend(b);
-        scene.bounds.extend(c);
-    }
+    // Front face (the emitting one, the outside of glass) = counter-clockwise seen from it.
+    void triangle(Vec3 a, Vec3 b, Vec3 c, int material) { add_scene_triangle(scene, a, b, c, material); }
 
     // a, b, c, d counter-clockwise seen from the front.
     void quad(Vec3 a, Vec3 b, Vec3 c, Vec3 d, int material) {
