@@ -7,7 +7,7 @@ if [ "$(id -u)" != 0 ]; then SUDO="sudo"; fi
 packages=(
   build-essential cmake pkg-config
   pocl-opencl-icd ocl-icd-opencl-dev opencl-clhpp-headers opencl-c-headers clinfo
-  libopenimageio-dev libtinyobjloader-dev libcli11-dev nlohmann-json3-dev libgtest-dev
+  libopenimageio-dev openimageio-tools libtinyobjloader-dev libcli11-dev nlohmann-json3-dev libgtest-dev
 )
 missing=()
 for p in "${packages[@]}"; do
