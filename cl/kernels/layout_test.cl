@@ -11,8 +11,14 @@
     S(TriangleInfo) F(TriangleInfo, material) F(TriangleInfo, light) F(TriangleInfo, normals)     \
         F(TriangleInfo, source_index)                                                             \
     S(TriangleNormals) F(TriangleNormals, n0) F(TriangleNormals, n1) F(TriangleNormals, n2)       \
+    S(TriangleUV) F(TriangleUV, u0) F(TriangleUV, v0) F(TriangleUV, u2) F(TriangleUV, v2)         \
+    S(TextureInfo) F(TextureInfo, offset) F(TextureInfo, width) F(TextureInfo, height)            \
+        F(TextureInfo, format) F(TextureInfo, scale_u) F(TextureInfo, offset_v) F(TextureInfo, clamp) \
     S(Material) F(Material, kd) F(Material, ks) F(Material, ke) F(Material, kind)                 \
-        F(Material, ior) F(Material, alpha) F(Material, pad0)                                     \
+        F(Material, ior) F(Material, alpha) F(Material, pad0) F(Material, kd_texture)             \
+        F(Material, ks_texture) F(Material, pad1) F(Material, cutout_texture)               \
+        F(Material, cutout_channel) F(Material, bump_texture) F(Material, bump_is_normal_map)     \
+        F(Material, bump_scale)                                                                   \
     S(Light) F(Light, position) F(Light, direction) F(Light, emission) F(Light, kind)             \
         F(Light, triangle) F(Light, cos_total_width) F(Light, cos_falloff_start) F(Light, area)   \
         F(Light, select_pdf) F(Light, power) F(Light, pad0)                                       \

@@ -53,6 +53,33 @@ typedef struct {
     clbdpt_float4 n0, n1, n2;
 } TriangleNormals;
 
+/* Texture coordinates of one triangle's corners, same order as Triangle (only in scenes with
+ * textures; (0, 0) at corners the OBJ gave none). */
+typedef struct {
+    float u0, v0, u1, v1, u2, v2;
+    float pad0, pad1;
+} TriangleUV;
+
+/* ---- Textures ------------------------------------------------------------------------- */
+
+#define TEXTURE_RGBA8_SRGB 0 /* one uint per texel: r | g << 8 | b << 16 | a << 24, sRGB-encoded rgb */
+#define TEXTURE_RGBA32F 1    /* four uints per texel: the bits of linear float r, g, b, a */
+#define TEXTURE_RGBA8_LINEAR 2 /* as TEXTURE_RGBA8_SRGB, values taken as they are (bump and normal maps) */
+
+/* One use of an image by a material (the MTL's map options are per use, the texels shared):
+ * texel (x, y), row 0 at the top of the image, starts at texels[offset + (y * width + x) *
+ * stride] with stride 1 or 4 by format. (u, v) is first mapped to (u * scale_u + offset_u,
+ * v * scale_v + offset_v) (MTL -s, -o), then wrapped (repeat), or clamped to [0, 1] with
+ * MTL -clamp on; v = 0 is the bottom of the image (OBJ convention). */
+typedef struct {
+    clbdpt_uint offset;
+    clbdpt_int width, height;
+    clbdpt_int format; /* TEXTURE_* */
+    float scale_u, scale_v, offset_u, offset_v;
+    clbdpt_int clamp;
+    clbdpt_int pad0, pad1, pad2;
+} TextureInfo;
+
 /* ---- Materials ------------------------------------------------------------------------ */
 
 #define MATERIAL_DIFFUSE 0 /* Kd / pi */
@@ -68,6 +95,16 @@ typedef struct {
     float ior;        /* glass: index of refraction inside (front face = outside) */
     float alpha;      /* glossy: GGX roughness alpha */
     clbdpt_int pad0;
+    /* Textures: 1 + the TextureInfo index, 0 = none (so a zero-initialised Material has none).
+     * A reflectance map multiplies kd or ks (the MTL rule). */
+    clbdpt_int kd_texture;    /* map_Kd */
+    clbdpt_int ks_texture;    /* map_Ks */
+    clbdpt_int pad1;
+    clbdpt_int cutout_texture; /* alpha test (map_d, or map_Kd's alpha channel): below 1/2 is a hole */
+    clbdpt_int cutout_channel; /* 3: alpha channel; 0: the first (grey) channel */
+    clbdpt_int bump_texture;  /* bump / map_bump (a height field) or norm (a tangent-space normal map) */
+    clbdpt_int bump_is_normal_map;
+    float bump_scale;         /* height map: MTL -bm, scene units per unit of texel value */
 } Material;
 
 /* ---- Lights --------------------------------------------------------------------------- */

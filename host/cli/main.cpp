@@ -16,6 +16,7 @@
 #include "device/opencl.h"
 #include "film/image_io.h"
 #include "render/aov.h"
+#include "render/automatic_view.h"
 #include "render/device_scene.h"
 #include "render/features.h"
 #include "render/render_loop.h"
@@ -46,7 +47,40 @@ struct RenderArgs {
     bool profile = false;
     bool verbose = false;
     bool all_features = false;
+    // Camera overrides (pbrt's LookAt order: eye, target, up).
+    std::vector<float> lookat;
+    std::vector<float> eye, target, up;
+    float fov = 0;
+    bool no_default_light = false;
 };
+
+// Applies the command line's camera overrides. Where the scene's camera was automatic and only
+// the field of view changes, the bounds are framed again for the new angle.
+void apply_camera_overrides(const RenderArgs& args, Scene* scene) {
+    auto vec = [](const std::vector<float>& v, size_t at) { return Vec3(v[at], v[at + 1], v[at + 2]); };
+    CameraDesc& camera = scene->camera;
+    const bool aimed = !args.lookat.empty() || !args.eye.empty() || !args.target.empty();
+    if (args.fov > 0) {
+        if (scene->camera_is_automatic && !aimed) camera = frame_bounds(scene->bounds, args.fov);
+        camera.fov_degrees = args.fov;
+    }
+    if (!args.lookat.empty()) {
+        camera.eye = vec(args.lookat, 0);
+        camera.target = vec(args.lookat, 3);
+        camera.up = vec(args.lookat, 6);
+    }
+    if (!args.eye.empty()) camera.eye = vec(args.eye, 0);
+    if (!args.target.empty()) camera.target = vec(args.target, 0);
+    if (!args.up.empty()) camera.up = vec(args.up, 0);
+    if (aimed || !args.up.empty()) {
+        scene->camera_is_automatic = false;
+        const Vec3 view = camera.target - camera.eye;
+        if (!(length(view) > 0.0f)) throw Error("camera: the target must differ from the eye");
+        if (!(length(camera.up) > 0.0f) || !(length(cross(normalize(view), normalize(camera.up))) > 1e-6f))
+            throw Error("camera: 'up' must be non-zero and not parallel to the viewing direction");
+        camera.focus_distance = length(view);
+    }
+}
 
 std::string human_bytes(uint64_t b) {
     char buf[64];
@@ -149,7 +183,10 @@ void check_film_fits_in_memory(int width, int height, int strategy_depth) {
 }
 
 int run_render(const RenderArgs& args) {
-    Scene scene = load_scene(args.scene);
+    LoadOptions load_options;
+    load_options.default_light = !args.no_default_light;
+    Scene scene = load_scene(args.scene, load_options);
+    apply_camera_overrides(args, &scene);
     for (const std::string& w : scene.warnings) std::fprintf(stderr, "clbdpt: warning: %s\n", w.c_str());
 
     const std::string output = args.output.empty() ? default_output(args.scene) : args.output;
@@ -185,6 +222,13 @@ int run_render(const RenderArgs& args) {
     }
     DeviceContext& device = *devices.front();
     DeviceScene ds = build_device_scene(scene, width, height);
+    if (scene.camera_is_automatic) {
+        const AutomaticView view = choose_automatic_view(scene.camera, scene.bounds, ds);
+        if (view.moved_inside) {
+            ds.camera = make_camera(view.camera, width, height);
+            std::fprintf(stderr, "clbdpt: note: %s\n", view.note.c_str());
+        }
+    }
     if (args.verbose)
         std::fprintf(stderr, "clbdpt: device %s; %zu triangles, %zu BVH nodes (%.3f s), %zu lights\n",
                      device_names.c_str(), ds.triangles.size(), ds.nodes.size(), ds.bvh_build_seconds, ds.lights.size());
@@ -321,6 +365,16 @@ int main(int argc, char** argv) {
         ->check(CLI::PositiveNumber);
     render->add_flag("--profile", args.profile,
                      "Report time per stage (render kernel, read-back, host accumulation) from OpenCL profiling events");
+    render->add_option("--lookat", args.lookat,
+                       "Camera: eye, target and up as 9 numbers (pbrt's LookAt order: ex ey ez tx ty tz ux uy uz)")
+        ->expected(9);
+    render->add_option("--eye", args.eye, "Camera position X Y Z")->expected(3);
+    render->add_option("--target", args.target, "Point the camera looks at X Y Z")->expected(3);
+    render->add_option("--up", args.up, "Camera up direction X Y Z")->expected(3);
+    render->add_option("--fov", args.fov, "Field of view in degrees across the shorter image axis")
+        ->check(CLI::Range(0.001f, 179.0f));
+    render->add_flag("--no-default-light", args.no_default_light,
+                     "Do not light a scene without lights by a uniform white environment");
     render->add_flag("-v,--verbose", args.verbose, "Print device, BVH and kernel flags");
 
     try {

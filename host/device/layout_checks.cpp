@@ -46,7 +46,18 @@ CLBDPT_CHECK_FIELD(TriangleNormals, n0, 0);
 CLBDPT_CHECK_FIELD(TriangleNormals, n1, 16);
 CLBDPT_CHECK_FIELD(TriangleNormals, n2, 32);
 
-CLBDPT_CHECK_STRUCT(Material, 64, 16);
+CLBDPT_CHECK_STRUCT(TriangleUV, 32, 4);
+CLBDPT_CHECK_FIELD(TriangleUV, u0, 0);
+CLBDPT_CHECK_FIELD(TriangleUV, v2, 20);
+
+CLBDPT_CHECK_STRUCT(TextureInfo, 48, 4);
+CLBDPT_CHECK_FIELD(TextureInfo, offset, 0);
+CLBDPT_CHECK_FIELD(TextureInfo, format, 12);
+CLBDPT_CHECK_FIELD(TextureInfo, scale_u, 16);
+CLBDPT_CHECK_FIELD(TextureInfo, offset_v, 28);
+CLBDPT_CHECK_FIELD(TextureInfo, clamp, 32);
+
+CLBDPT_CHECK_STRUCT(Material, 96, 16);
 CLBDPT_CHECK_FIELD(Material, kd, 0);
 CLBDPT_CHECK_FIELD(Material, ks, 16);
 CLBDPT_CHECK_FIELD(Material, ke, 32);
@@ -54,6 +65,10 @@ CLBDPT_CHECK_FIELD(Material, kind, 48);
 CLBDPT_CHECK_FIELD(Material, ior, 52);
 CLBDPT_CHECK_FIELD(Material, alpha, 56);
 CLBDPT_CHECK_FIELD(Material, pad0, 60);
+CLBDPT_CHECK_FIELD(Material, kd_texture, 64);
+CLBDPT_CHECK_FIELD(Material, cutout_texture, 76);
+CLBDPT_CHECK_FIELD(Material, bump_texture, 84);
+CLBDPT_CHECK_FIELD(Material, bump_scale, 92);
 
 CLBDPT_CHECK_STRUCT(Light, 80, 16);
 CLBDPT_CHECK_FIELD(Light, position, 0);

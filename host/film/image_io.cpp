@@ -167,4 +167,45 @@ std::vector<float> read_image_rgb(const std::string& path, int* width, int* heig
     return rgb;
 }
 
+TextureImage read_texture_image(const std::string& path) {
+    std::unique_ptr<OIIO::ImageInput> in = OIIO::ImageInput::open(path);
+    if (!in) throw Error("cannot read '" + path + "': " + first_line(OIIO::geterror(), "cannot open"));
+    const OIIO::ImageSpec& spec = in->spec();
+    const int channels = spec.nchannels;
+    if (spec.width <= 0 || spec.height <= 0 || channels <= 0 || spec.depth > 1) {
+        throw Error("cannot read '" + path + "': not a 2D image");
+    }
+    TextureImage image;
+    image.width = spec.width;
+    image.height = spec.height;
+    image.is_float = spec.format.is_floating_point();
+    image.has_alpha = channels == 2 || channels >= 4;
+    const size_t pixels = static_cast<size_t>(spec.width) * static_cast<size_t>(spec.height);
+    const size_t n = pixels * static_cast<size_t>(channels);
+    // Which file channel feeds r, g, b, a (-1: alpha, opaque).
+    int source[4] = {0, 1, 2, 3};
+    if (channels < 3) source[1] = source[2] = 0;
+    if (!image.has_alpha) source[3] = -1;
+    else if (channels == 2) source[3] = 1;
+    if (image.is_float) {
+        std::vector<float> all(n);
+        if (!in->read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, all.data()))
+            throw Error("cannot read '" + path + "': " + first_line(in->geterror(), "read failed"));
+        image.rgba32f.resize(pixels * 4);
+        for (size_t p = 0; p < pixels; ++p)
+            for (int c = 0; c < 4; ++c)
+                image.rgba32f[p * 4 + size_t(c)] = source[c] < 0 ? 1.0f : all[p * size_t(channels) + size_t(source[c])];
+    } else {
+        std::vector<uint8_t> all(n);
+        if (!in->read_image(0, 0, 0, channels, OIIO::TypeDesc::UINT8, all.data()))
+            throw Error("cannot read '" + path + "': " + first_line(in->geterror(), "read failed"));
+        image.rgba8.resize(pixels * 4);
+        for (size_t p = 0; p < pixels; ++p)
+            for (int c = 0; c < 4; ++c)
+                image.rgba8[p * 4 + size_t(c)] = source[c] < 0 ? 255 : all[p * size_t(channels) + size_t(source[c])];
+    }
+    in->close();
+    return image;
+}
+
 }  // namespace clbdpt

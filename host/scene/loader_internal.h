@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstddef>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -11,6 +12,7 @@
 
 namespace tinyobj {
 struct material_t;
+struct texture_option_t;
 }
 
 namespace clbdpt::detail {
@@ -25,19 +27,24 @@ struct ObjPrescan {
     std::vector<int> face_lines;       // source line of each `f`, in order
     std::vector<size_t> face_offsets;  // face f's corners: face_vertices[face_offsets[f]..[f+1])
     std::vector<int> face_vertices;    // 0-based position index of every face corner
+    struct MissingFile {
+        int line;
+        std::string shown;  // the path as the message shows it
+    };
+    std::vector<MissingFile> missing_mtllibs;  // `mtllib` files that cannot be opened
 };
 
 // Reads and validates `obj_path` (shown in messages as `display`). Throws Error
 // "display:LINE: ..." on a malformed or truncated line, a non-finite number, an index out of
-// range, or a `mtllib` whose file does not exist next to the OBJ.
+// range. A `mtllib` whose file cannot be opened is recorded, not an error.
 ObjPrescan prescan_obj(const std::string& obj_path, const std::string& display);
 
 // ---- mtl_materials.cpp -------------------------------------------------------------------
 
-// Maps one MTL material to the device Material (see the mapping table in mtl_materials.cpp).
-// Features with no equivalent add one warning, naming `source` and the material, to `warnings`.
-Material map_mtl_material(const tinyobj::material_t& mtl, const std::string& source,
-                          std::vector<std::string>* warnings);
+// Maps one MTL material to the device Material (see the mapping table in mtl_materials.cpp),
+// textures aside. Appends the features it has no equivalent for, as MTL spells them, to
+// `unsupported`; sets *rescaled when Kd + Ks exceeded 1 and both were scaled down.
+Material map_mtl_material(const tinyobj::material_t& mtl, std::vector<std::string>* unsupported, bool* rescaled);
 
 // Grey Lambertian (kd 0.5) for faces that name no material.
 Material default_material();
@@ -45,11 +52,45 @@ constexpr const char* kDefaultMaterialName = "default";
 
 bool is_emissive(const Material& m);
 
+// ---- mtl_textures.cpp --------------------------------------------------------------------
+
+// Where an MTL's texture reference `name` points, relative to `base_dir` (backslashes, "./"
+// prefixes and case differences tolerated); "" if no such file exists.
+std::string resolve_texture_path(const std::string& base_dir, const std::string& name);
+
+// Reads each texture image once into Scene::texels and adds one TextureInfo per use.
+class TextureLoader {
+public:
+    struct Use {
+        int texture = 0;               // 1 + TextureInfo index, 0 = missing or unreadable
+        bool has_alpha = false;        // the image has an alpha channel
+        bool alpha_has_holes = false;  // ... with some texel below 1/2
+    };
+    // colour: 8-bit texels are sRGB-encoded colour (else data: heights, normals, masks).
+    Use add(Scene& scene, const std::string& base_dir, const std::string& name,
+            const tinyobj::texture_option_t& option, bool colour);
+
+    std::vector<std::string> unreadable;  // references that could not be read, as written
+
+private:
+    struct Image {
+        size_t offset = 0;
+        int width = 0, height = 0, format = 0;
+        bool has_alpha = false, has_holes = false;
+    };
+    std::map<std::string, Image> images_;  // by resolved path and colour/data
+};
+
+// Sets m's texture fields from the maps `mtl` names (the mapping table in mtl_textures.cpp).
+void attach_textures(Scene& scene, TextureLoader& loader, const std::string& base_dir, const tinyobj::material_t& mtl,
+                     Material* m);
+
 // ---- obj_loader.cpp ----------------------------------------------------------------------
 
 // State shared by the meshes of one scene.
 struct MeshLoadContext {
     int default_material = -1;  // index of the shared "default" material once one face needs it
+    TextureLoader textures;
 };
 
 // Appends the triangles, normals and materials of one OBJ file to `scene` and extends its
@@ -64,9 +105,6 @@ void load_json_scene(Scene& scene, const std::string& path);
 
 // ---- scene_loader.cpp --------------------------------------------------------------------
 
-// The camera a bare OBJ gets: looking along +z at the centre of `bounds` from far enough that
-// the bounding sphere (radius = half the diagonal) just fits in the field of view.
-CameraDesc frame_bounds(const Bounds3& bounds, float fov_degrees);
 
 // Throws Error("cannot open 'display'[ (referenced by ...)]") unless `path` is a readable file.
 void require_readable_file(const std::string& path, const std::string& display,

@@ -6,8 +6,9 @@
 //   otherwise                    -> MATERIAL_DIFFUSE, kd = Kd
 //   Ke (any kind)                -> ke, radiance of a one-sided area light (front face = CCW)
 //
-// Anything else the MTL says and the renderer cannot show (textures, other illum models, a
-// transmission filter, dissolve, the PBR extras) is ignored with one warning per material.
+// Texture maps are attached by mtl_textures.cpp. Anything else the MTL says and the renderer
+// cannot show (other illum models, a transmission filter, dissolve, map_Ke and other maps, the
+// PBR extras) is reported back to the loader, which warns once per kind with a count.
 #include <algorithm>
 #include <cmath>
 #include <string>
@@ -54,14 +55,13 @@ clbdpt_float4 color(const tinyobj::real_t c[3], const char* key, std::vector<std
 
 // The features of `mtl` the renderer has no equivalent for, as MTL spells them.
 void collect_unsupported(const tinyobj::material_t& mtl, std::vector<std::string>* unsupported) {
+    // map_Kd, map_Ks, map_d, bump and norm are read (mtl_textures.cpp); map_Ka is ambient,
+    // which a physically based renderer has no use for, and is ignored without a word.
     const std::pair<const std::string*, const char*> textures[] = {
-        {&mtl.ambient_texname, "map_Ka"},   {&mtl.diffuse_texname, "map_Kd"},
-        {&mtl.specular_texname, "map_Ks"},  {&mtl.specular_highlight_texname, "map_Ns"},
-        {&mtl.bump_texname, "bump"},        {&mtl.displacement_texname, "disp"},
-        {&mtl.alpha_texname, "map_d"},      {&mtl.reflection_texname, "refl"},
-        {&mtl.roughness_texname, "map_Pr"}, {&mtl.metallic_texname, "map_Pm"},
-        {&mtl.sheen_texname, "map_Ps"},     {&mtl.emissive_texname, "map_Ke"},
-        {&mtl.normal_texname, "norm"},
+        {&mtl.specular_highlight_texname, "map_Ns"}, {&mtl.displacement_texname, "disp"},
+        {&mtl.reflection_texname, "refl"},           {&mtl.roughness_texname, "map_Pr"},
+        {&mtl.metallic_texname, "map_Pm"},           {&mtl.sheen_texname, "map_Ps"},
+        {&mtl.emissive_texname, "map_Ke"},
     };
     for (const auto& [name, key] : textures) {
         if (!name->empty()) unsupported->push_back(key);
@@ -77,7 +77,7 @@ void collect_unsupported(const tinyobj::material_t& mtl, std::vector<std::string
     const bool tf_neutral = (tf[0] == 0 && tf[1] == 0 && tf[2] == 0) || (tf[0] == 1 && tf[1] == 1 && tf[2] == 1);
     if (!tf_neutral) unsupported->push_back("Tf");
     // Glass is transparent already; on anything else dissolve would be alpha blending.
-    if (mtl.dissolve < 1 && illum != 7) unsupported->push_back("d (dissolve)");
+    if (mtl.dissolve < 1 && illum != 7 && mtl.alpha_texname.empty()) unsupported->push_back("d (dissolve)");
     if (mtl.metallic > 0) unsupported->push_back("Pm");
     if (mtl.sheen > 0) unsupported->push_back("Ps");
     if (mtl.clearcoat_thickness > 0) unsupported->push_back("Pc");
@@ -88,12 +88,6 @@ void collect_unsupported(const tinyobj::material_t& mtl, std::vector<std::string
         (void)value;
         unsupported->push_back(key);
     }
-}
-
-std::string join(const std::vector<std::string>& items) {
-    std::string out;
-    for (size_t i = 0; i < items.size(); ++i) out += (i ? ", " : "") + items[i];
-    return out;
 }
 
 }  // namespace
@@ -108,13 +102,11 @@ Material default_material() {
 
 bool is_emissive(const Material& m) { return any_positive(m.ke); }
 
-Material map_mtl_material(const tinyobj::material_t& mtl, const std::string& source,
-                          std::vector<std::string>* warnings) {
-    std::vector<std::string> unsupported;
-    collect_unsupported(mtl, &unsupported);
-    const clbdpt_float4 kd = color(mtl.diffuse, "Kd", &unsupported);
-    const clbdpt_float4 ks = color(mtl.specular, "Ks", &unsupported);
-    const clbdpt_float4 ke = color(mtl.emission, "Ke", &unsupported);
+Material map_mtl_material(const tinyobj::material_t& mtl, std::vector<std::string>* unsupported, bool* rescaled) {
+    collect_unsupported(mtl, unsupported);
+    const clbdpt_float4 kd = color(mtl.diffuse, "Kd", unsupported);
+    const clbdpt_float4 ks = color(mtl.specular, "Ks", unsupported);
+    const clbdpt_float4 ke = color(mtl.emission, "Ke", unsupported);
 
     Material m{};
     m.ke = ke;
@@ -149,25 +141,16 @@ Material map_mtl_material(const tinyobj::material_t& mtl, const std::string& sou
 
     // A surface cannot reflect more than it receives: where kd + ks > 1, scale both so the
     // channel sums to 1. (Glass has no kd/ks lobes to balance.)
+    *rescaled = false;
     if (m.kind != MATERIAL_GLASS) {
-        bool rescaled = false;
         for (int i = 0; i < 3; ++i) {
             const float sum = m.kd.s[i] + m.ks.s[i];
             if (sum > 1.0f) {
                 m.kd.s[i] /= sum;
                 m.ks.s[i] /= sum;
-                rescaled = true;
+                *rescaled = true;
             }
         }
-        if (rescaled) {
-            warnings->push_back(source + ": material \"" + mtl.name +
-                                "\": Kd + Ks exceeds 1, both scaled down to conserve energy");
-        }
-    }
-
-    if (!unsupported.empty()) {
-        warnings->push_back(source + ": material \"" + mtl.name + "\": ignoring unsupported " +
-                            join(unsupported));
     }
     return m;
 }

@@ -2,7 +2,10 @@
 // parses and triangulates it (fan for quads, ear clipping beyond, both keeping the winding), and
 // each triangle is checked for zero area and traced back to its `f` line for the message.
 #include <algorithm>
+#include <cctype>
 #include <cmath>
+#include <filesystem>
+#include <map>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -58,14 +61,14 @@ public:
         return face_;
     }
 
-    // The first face that produced no triangle at all (tinyobj drops polygons whose ear
-    // clipping finds no ear, i.e. degenerate ones), or -1.
-    long first_empty_face() {
-        if (lost_) return -1;
+    // How many faces produced no triangle at all (tinyobj drops polygons whose ear clipping
+    // finds no ear, i.e. degenerate ones); 0 once the trail is lost.
+    size_t empty_face_count() {
+        if (lost_) return 0;
         const long face_count = static_cast<long>(scan_.face_lines.size());
         if (face_ < face_count && emitted_ == 0) empty_faces_.push_back(face_);
         for (long f = face_ + 1; f < face_count; ++f) empty_faces_.push_back(f);
-        return empty_faces_.empty() ? -1 : empty_faces_.front();
+        return empty_faces_.size();
     }
 
 private:
@@ -88,6 +91,47 @@ private:
 
 }  // namespace
 
+namespace {
+
+// tinyobj repeats some warnings once per material or per `usemtl` line ("Both `d` and `Tr`
+// parameters defined for \"x\"", "material [ 'x' ] not found in .mtl"): messages that differ
+// only in quoted names and numbers are one kind, shown once with a count.
+std::string warning_kind(const std::string& message) {
+    std::string kind;
+    bool in_quotes = false;
+    for (char c : message) {
+        if (c == '"' || c == '\'') {
+            in_quotes = !in_quotes;
+            if (in_quotes) kind += "Q";
+        } else if (!in_quotes) {
+            kind += std::isdigit(static_cast<unsigned char>(c)) ? '#' : c;
+        }
+    }
+    return kind;
+}
+
+// Adds "display: MESSAGE" once per kind, with "(and N more like it)" where there were more.
+void add_collapsed(std::vector<std::string>* warnings, const std::string& display,
+                   const std::vector<std::string>& messages) {
+    std::vector<std::pair<std::string, size_t>> kinds;  // first message of each kind, count
+    std::map<std::string, size_t> index;
+    for (const std::string& m : messages) {
+        auto [it, added] = index.emplace(warning_kind(m), kinds.size());
+        if (added) kinds.push_back({m, 0});
+        ++kinds[it->second].second;
+    }
+    for (const auto& [first, count] : kinds) {
+        warnings->push_back(display + ": " + first +
+                            (count > 1 ? " (and " + std::to_string(count - 1) + " more like it)" : std::string()));
+    }
+}
+
+std::string plural(size_t n, const std::string& one, const std::string& many) {
+    return std::to_string(n) + " " + (n == 1 ? one : many);
+}
+
+}  // namespace
+
 void append_obj_mesh(Scene& scene, MeshLoadContext& context, const std::string& obj_path,
                      const std::string& display, const std::string& referenced_by) {
     require_readable_file(obj_path, display, referenced_by);
@@ -103,18 +147,23 @@ void append_obj_mesh(Scene& scene, MeshLoadContext& context, const std::string& 
         std::vector<std::string> lines = split_message_lines(reader.Error());
         throw Error(display + ": " + (lines.empty() ? std::string("tinyobj failed to parse the file") : lines[0]));
     }
+    for (const ObjPrescan::MissingFile& missing : scan.missing_mtllibs) {
+        scene.warnings.push_back(display + ":" + std::to_string(missing.line) + ": cannot open '" + missing.shown +
+                                 "'; its materials are replaced by the default grey diffuse");
+    }
+    std::vector<std::string> parser_warnings;
     for (const std::string& line : split_message_lines(reader.Warning())) {
-        // A material file that cannot be read is an error here (tinyobj only warns and falls
-        // back to its default material). prescan_obj catches the usual case with a line number.
-        if (line.find("Material file [") != std::string::npos || line.find("Failed to load material") != std::string::npos) {
-            throw Error(display + ": " + line);
-        }
+        // Said already, with its line, by the missing-mtllib warning above.
+        if (line.find("Material file [") != std::string::npos || line.find("Failed to load material") != std::string::npos)
+            continue;
         if (line.find("not found in .mtl") != std::string::npos) {
-            scene.warnings.push_back(display + ": " + line + "; its faces use the \"default\" material");
+            if (!scan.missing_mtllibs.empty()) continue;  // the missing file says it all
+            parser_warnings.push_back(line + "; its faces use the \"default\" material");
             continue;
         }
-        scene.warnings.push_back(display + ": " + line);
+        parser_warnings.push_back(line);
     }
+    add_collapsed(&scene.warnings, display, parser_warnings);
 
     const tinyobj::attrib_t& attrib = reader.GetAttrib();
     const std::vector<tinyobj::material_t>& mtls = reader.GetMaterials();
@@ -127,11 +176,42 @@ void append_obj_mesh(Scene& scene, MeshLoadContext& context, const std::string& 
         }
     }
 
+    // Materials: unsupported features are counted per kind over all materials of the file.
     const int material_base = static_cast<int>(scene.materials.size());
+    const std::string base_dir = std::filesystem::path(obj_path).parent_path().string();
+    std::map<std::string, size_t> unsupported_count;
+    std::vector<std::string> unsupported_order;
+    size_t rescaled_count = 0;
+    const size_t unreadable_before = context.textures.unreadable.size();
     for (const tinyobj::material_t& mtl : mtls) {
-        scene.materials.push_back(map_mtl_material(mtl, display, &scene.warnings));
+        std::vector<std::string> unsupported;
+        bool rescaled = false;
+        Material m = map_mtl_material(mtl, &unsupported, &rescaled);
+        attach_textures(scene, context.textures, base_dir, mtl, &m);
+        for (const std::string& feature : unsupported) {
+            if (unsupported_count[feature]++ == 0) unsupported_order.push_back(feature);
+        }
+        rescaled_count += rescaled ? 1 : 0;
+        scene.materials.push_back(m);
         scene.material_names.push_back(mtl.name);
     }
+    if (!unsupported_order.empty()) {
+        std::string list;
+        for (const std::string& feature : unsupported_order)
+            list += (list.empty() ? "" : ", ") + feature + " (" + plural(unsupported_count[feature], "material", "materials") + ")";
+        scene.warnings.push_back(display + ": ignoring unsupported MTL features: " + list);
+    }
+    if (rescaled_count > 0) {
+        scene.warnings.push_back(display + ": " + plural(rescaled_count, "material has", "materials have") +
+                                 " Kd + Ks above 1; both scaled down to conserve energy");
+    }
+    const std::vector<std::string>& unreadable = context.textures.unreadable;
+    if (unreadable.size() > unreadable_before) {
+        scene.warnings.push_back(display + ": " + plural(unreadable.size() - unreadable_before, "texture", "textures") +
+                                 " missing or unreadable (first: '" + unreadable[unreadable_before] +
+                                 "'); their materials use their constant colours");
+    }
+    const bool textured = !scene.textures.empty();
 
     auto position = [&](int index) {
         return Vec3(attrib.vertices[3 * index], attrib.vertices[3 * index + 1], attrib.vertices[3 * index + 2]);
@@ -142,6 +222,7 @@ void append_obj_mesh(Scene& scene, MeshLoadContext& context, const std::string& 
 
     FaceTracker tracker(scan);
     size_t flat_fallbacks = 0;
+    size_t degenerate = 0;
     for (const tinyobj::shape_t& shape : reader.GetShapes()) {
         const tinyobj::mesh_t& mesh = shape.mesh;
         size_t offset = 0;
@@ -157,14 +238,15 @@ void append_obj_mesh(Scene& scene, MeshLoadContext& context, const std::string& 
                     throw Error(display + ": face index out of range");
                 }
             }
-            const long face = tracker.face_of(vi[0], vi[1], vi[2]);
-            const std::string where =
-                display + (face >= 0 ? ":" + std::to_string(scan.face_lines[face]) : std::string());
+            tracker.face_of(vi[0], vi[1], vi[2]);
 
+            // Slivers and repeated corners are routine in exported files (pbrt, Embree and
+            // Mitsuba drop them too): they cover no area, so dropping them changes no image.
             const Vec3 p[3] = {position(vi[0]), position(vi[1]), position(vi[2])};
             const float doubled_area = length(cross(p[1] - p[0], p[2] - p[0]));
             if (!(doubled_area > 0.0f) || !std::isfinite(doubled_area)) {
-                throw Error(where + ": zero-area triangle");
+                ++degenerate;
+                continue;
             }
 
             int material = mesh.material_ids.empty() ? -1 : mesh.material_ids[f];
@@ -205,6 +287,21 @@ void append_obj_mesh(Scene& scene, MeshLoadContext& context, const std::string& 
                 }
             }
 
+            if (textured) {
+                // Texture coordinates for every triangle once any material has a texture
+                // (earlier meshes' triangles get (0, 0)).
+                scene.uvs.resize(scene.triangles.size());
+                TriangleUV uv{};
+                float* corner[3][2] = {{&uv.u0, &uv.v0}, {&uv.u1, &uv.v1}, {&uv.u2, &uv.v2}};
+                for (int k = 0; k < 3; ++k) {
+                    const int t = idx[k].texcoord_index;
+                    if (t < 0 || static_cast<size_t>(2 * t + 1) >= attrib.texcoords.size()) continue;
+                    *corner[k][0] = attrib.texcoords[2 * t];
+                    *corner[k][1] = attrib.texcoords[2 * t + 1];
+                }
+                scene.uvs.push_back(uv);
+            }
+
             Triangle tri{};
             tri.p0 = point4(p[0]);
             tri.p1 = point4(p[1]);
@@ -215,11 +312,13 @@ void append_obj_mesh(Scene& scene, MeshLoadContext& context, const std::string& 
         }
     }
 
-    const long empty_face = tracker.first_empty_face();
-    if (empty_face >= 0) {
-        throw Error(display + ":" + std::to_string(scan.face_lines[empty_face]) +
-                    ": zero-area face (no triangle survives triangulation)");
+    // Faces whose ear clipping found no ear (degenerate polygons) produced no triangle.
+    degenerate += tracker.empty_face_count();
+    if (degenerate > 0) {
+        scene.warnings.push_back(display + ": dropped " +
+                                 plural(degenerate, "degenerate triangle", "degenerate triangles") + " (zero area)");
     }
+    if (scene.triangles.empty()) throw Error(display + ": no triangles with a non-zero area");
     if (flat_fallbacks > 0) {
         scene.warnings.push_back(display + ": " + std::to_string(flat_fallbacks) +
                                  " triangle(s) have a zero-length vertex normal; they are shaded flat");

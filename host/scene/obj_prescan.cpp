@@ -238,9 +238,9 @@ ObjPrescan prescan_obj(const std::string& obj_path, const std::string& display) 
                 fs::path file = fs::path(obj_path).parent_path() / name;
                 std::error_code ec;
                 if (!fs::is_regular_file(file, ec) || !std::ifstream(file)) {
+                    // A download often lacks its MTL: the loader warns and renders grey.
                     fs::path shown = fs::path(display).parent_path() / name;
-                    throw Error("cannot open '" + shown.string() + "' (referenced by " + display + ":" +
-                                std::to_string(line) + ")");
+                    scan.missing_mtllibs.push_back({line, shown.string()});
                 }
             }
         }

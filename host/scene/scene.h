@@ -62,15 +62,35 @@ struct Scene {
     std::vector<Material> materials;
     std::vector<std::string> material_names;  // one per material
 
+    // Textures (only when a material names one): texture coordinates per triangle (same order
+    // as triangles; empty when no material has a texture), one TextureInfo per use of an image
+    // by a material, and every image's texels in one array (layout in cl/shared/types.h).
+    std::vector<TriangleUV> uvs;
+    std::vector<TextureInfo> textures;
+    std::vector<uint32_t> texels;
+
     std::vector<LightDesc> lights;
     EnvironmentMap environment_map;  // filled if an environment light names a map
 
+    bool camera_is_automatic = true;    // no camera given: framed from the bounds (may be refined
+                                        // once the BVH exists, see choose_automatic_view)
     Bounds3 bounds;                     // of all triangles
     std::vector<std::string> warnings;  // one line each (unmappable MTL features, ...)
 };
 
+// The camera a bare OBJ gets: from the +z side (OpenGL's convention, which OBJ files follow),
+// looking along -z at the centre of `bounds` from far enough that the bounding sphere (radius =
+// half the diagonal) just fits in the field of view.
+CameraDesc frame_bounds(const Bounds3& bounds, float fov_degrees);
+
+struct LoadOptions {
+    // A scene with no light at all gets a uniform white environment (radiance 1), as Mitsuba
+    // does, so an unlit model renders as a clay render instead of black.
+    bool default_light = true;
+};
+
 // Loads a scene file (.json) or a bare .obj (camera framing the bounding box, lit by its
 // emissive materials). Throws clbdpt::Error.
-Scene load_scene(const std::string& path);
+Scene load_scene(const std::string& path, const LoadOptions& options = {});
 
 }  // namespace clbdpt

@@ -405,6 +405,7 @@ void load_json_scene(Scene& scene, const std::string& path) {
     if (camera.target) scene.camera.target = *camera.target;
     if (camera.up) scene.camera.up = *camera.up;
     if (camera.lens_radius) scene.camera.lens_radius = *camera.lens_radius;
+    scene.camera_is_automatic = !camera.eye && !camera.target;
     const Vec3 view = scene.camera.target - scene.camera.eye;
     if (!(length(view) > 0.0f)) r.fail("camera.target", "must differ from camera.eye");
     if (!(length(scene.camera.up) > 0.0f)) r.fail("camera.up", "must not be zero");

@@ -26,25 +26,6 @@ void require_readable_file(const std::string& path, const std::string& display,
     }
 }
 
-CameraDesc frame_bounds(const Bounds3& bounds, float fov_degrees) {
-    CameraDesc camera;
-    camera.fov_degrees = fov_degrees;
-    const Vec3 center = bounds.empty() ? Vec3(0, 0, 0) : bounds.center();
-    const float radius = bounds.empty() ? 0.0f : 0.5f * length(bounds.extent());
-    // The bounding sphere just fits the shorter image axis when its tangent cone has the
-    // field of view's half angle: distance = radius / sin(fov / 2).
-    const float half_fov = 0.5f * fov_degrees * kPi / 180.0f;
-    float distance = radius / std::sin(half_fov);
-    if (!(distance > 0.0f) || !std::isfinite(distance)) distance = 1.0f;
-    const Vec3 forward(0, 0, 1);
-    camera.eye = center - forward * distance;
-    camera.target = center;
-    camera.up = Vec3(0, 1, 0);
-    camera.lens_radius = 0.0f;
-    camera.focus_distance = distance;
-    return camera;
-}
-
 namespace {
 
 std::string lower_extension(const std::string& path) {
@@ -63,7 +44,27 @@ bool has_emissive_triangle(const Scene& scene) {
 }  // namespace
 }  // namespace detail
 
-Scene load_scene(const std::string& path) {
+CameraDesc frame_bounds(const Bounds3& bounds, float fov_degrees) {
+    CameraDesc camera;
+    camera.fov_degrees = fov_degrees;
+    const Vec3 center = bounds.empty() ? Vec3(0, 0, 0) : bounds.center();
+    const float radius = bounds.empty() ? 0.0f : 0.5f * length(bounds.extent());
+    // The bounding sphere just fits the shorter image axis when its tangent cone has the
+    // field of view's half angle: distance = radius / sin(fov / 2).
+    const float half_fov = 0.5f * fov_degrees * detail::kPi / 180.0f;
+    float distance = radius / std::sin(half_fov);
+    if (!(distance > 0.0f) || !std::isfinite(distance)) distance = 1.0f;
+    // OBJ files follow OpenGL's convention: +y up, the viewer on the +z side looking toward -z.
+    const Vec3 forward(0, 0, -1);
+    camera.eye = center - forward * distance;
+    camera.target = center;
+    camera.up = Vec3(0, 1, 0);
+    camera.lens_radius = 0.0f;
+    camera.focus_distance = distance;
+    return camera;
+}
+
+Scene load_scene(const std::string& path, const LoadOptions& options) {
     Scene scene;
     scene.path = path;
     const std::string ext = detail::lower_extension(path);
@@ -72,13 +73,22 @@ Scene load_scene(const std::string& path) {
     } else if (ext == ".obj") {
         detail::MeshLoadContext context;
         detail::append_obj_mesh(scene, context, path, path, "");
-        scene.camera = detail::frame_bounds(scene.bounds, CameraDesc{}.fov_degrees);
+        scene.camera = frame_bounds(scene.bounds, CameraDesc{}.fov_degrees);
     } else {
         detail::require_readable_file(path, path, "");
         throw Error(path + ": unknown scene format '" + ext + "' (expected .json or .obj)");
     }
     if (scene.lights.empty() && !detail::has_emissive_triangle(scene)) {
-        scene.warnings.push_back("scene has no lights: the image will be black");
+        if (options.default_light) {
+            LightDesc sky;
+            sky.kind = LightDesc::Kind::Environment;
+            sky.color = Vec3(1, 1, 1);
+            scene.lights.push_back(sky);
+            scene.warnings.push_back(
+                "scene has no lights: lit by a uniform white environment of radiance 1 (--no-default-light turns it off)");
+        } else {
+            scene.warnings.push_back("scene has no lights: the image will be black");
+        }
     }
     return scene;
 }
