@@ -1,6 +1,8 @@
 /* Ray queries against the BVH of cl/shared/types.h (built by host/bvh/bvh.cpp):
  *   intersect: the closest hit with t in (0, tmax);
  *   occluded:  whether anything is hit with t in (0, tmax).
+ * With HAS_CUTOUTS, hits that `cutouts` says are holes (cl/cutouts.h) do not count; callers
+ * without cut-outs pass a null pointer.
  * Triangles are two-sided. The ray-triangle test is the watertight one of Woop, Benthin and
  * Wald, "Watertight Ray/Triangle Intersection" (JCGT 2013), as in pbrt-v3 Triangle::Intersect:
  * rays through shared edges and vertices of a closed mesh hit at least one of the triangles.
@@ -14,6 +16,7 @@
 #define CLBDPT_BVH_H
 
 #include "shared/types.h"
+#include "cutouts.h"
 #include "ray.h"
 
 #ifdef cl_khr_fp64
@@ -222,7 +225,7 @@ __attribute__((always_inline)) inline bool bvh_hit_triangle(__global const float
     if (hit_mask.s##lane) {                                                                       \
         int c_ = node->child[lane];                                                               \
         if (c_ < 0) {                                                                             \
-            if (bvh_leaf_occluded(tris, c_, &r, tmax)) return true;                               \
+            if (bvh_leaf_occluded(tris, cutouts, c_, &r, tmax)) return true;                      \
         } else {                                                                                  \
             BVH_PUSH_SORTED(c_, t_near.s##lane, node_t, base);                                    \
             BVH_PREFETCH(nodes + c_, sizeof(BvhNode));                                            \
@@ -237,8 +240,8 @@ __attribute__((always_inline)) inline bool bvh_hit_triangle(__global const float
 
 /* Closest hit along o + t d with t in (0, tmax). d need not be unit length; t is in units of
  * |d|. On a miss returns false with hit->triangle = -1 and hit->t = tmax. */
-inline bool intersect(__global const BvhNode* nodes, __global const Triangle* tris, float3 o, float3 d,
-                      float tmax, Hit* hit) {
+inline bool intersect(__global const BvhNode* nodes, __global const Triangle* tris, const Cutouts* cutouts,
+                      float3 o, float3 d, float tmax, Hit* hit) {
     BvhRay r = bvh_ray(o, d);
     /* Entries still to visit (node index, or leaf entry) and the distance at which the ray
      * enters their boxes. The builder bounds the depth of the stack (host/bvh/bvh.cpp). */
@@ -266,6 +269,9 @@ inline bool intersect(__global const BvhNode* nodes, __global const Triangle* tr
             for (int i = first; i < end; ++i) {
                 float t, b1, b2;
                 if (bvh_hit_triangle((__global const float*)(tris + i), &r, hit->t, &t, &b1, &b2)) {
+#ifdef HAS_CUTOUTS
+                    if (cutouts && cutout_hides(cutouts, i, b1, b2)) continue;
+#endif
                     hit->t = t;
                     hit->b1 = b1;
                     hit->b2 = b2;
@@ -283,12 +289,17 @@ inline bool intersect(__global const BvhNode* nodes, __global const Triangle* tr
     }
 }
 
-__attribute__((always_inline)) inline bool bvh_leaf_occluded(__global const Triangle* tris, int leaf,
-                                                             const BvhRay* r, float tmax) {
+__attribute__((always_inline)) inline bool bvh_leaf_occluded(__global const Triangle* tris, const Cutouts* cutouts,
+                                                             int leaf, const BvhRay* r, float tmax) {
     int first = BVH_LEAF_FIRST(leaf), end = first + BVH_LEAF_COUNT(leaf);
     for (int i = first; i < end; ++i) {
         float t, b1, b2;
-        if (bvh_hit_triangle((__global const float*)(tris + i), r, tmax, &t, &b1, &b2)) return true;
+        if (bvh_hit_triangle((__global const float*)(tris + i), r, tmax, &t, &b1, &b2)) {
+#ifdef HAS_CUTOUTS
+            if (cutouts && cutout_hides(cutouts, i, b1, b2)) continue;
+#endif
+            return true;
+        }
     }
     return false;
 }
@@ -299,8 +310,8 @@ __attribute__((always_inline)) inline bool bvh_leaf_occluded(__global const Tria
  * (about 3x faster than visiting them in distance order on traversal_bench's random any-hit
  * rays in a room).
  * Interior children are then visited nearest first. */
-inline bool occluded(__global const BvhNode* nodes, __global const Triangle* tris, float3 o, float3 d,
-                     float tmax) {
+inline bool occluded(__global const BvhNode* nodes, __global const Triangle* tris, const Cutouts* cutouts,
+                     float3 o, float3 d, float tmax) {
     BvhRay r = bvh_ray(o, d);
     int stack_node[BVH_STACK_SIZE];
     int sp = 0;

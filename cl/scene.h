@@ -4,6 +4,8 @@
 #define CLBDPT_SCENE_H
 
 #include "shared/types.h"
+#include "cutouts.h"
+#include "textures.h"
 
 typedef struct {
     __global const BvhNode* nodes;
@@ -15,6 +17,9 @@ typedef struct {
     __global const float* light_cdf;        /* light_count + 1 entries, selection by power */
     __global const float4* env_texels;      /* lat-long map, env_width * env_height, row 0 = +y */
     __global const float* env_distribution; /* see lights.h, "Environment map distribution" */
+    __global const TriangleUV* uvs;         /* per triangle, in scenes with textures */
+    Textures textures;
+    Cutouts cutouts; /* what the ray queries need to see holes (cl/cutouts.h) */
     Camera camera;
     SceneInfo info;
     uint* rays_traced; /* the work item's ray counter (closest-hit and shadow rays) */
@@ -26,17 +31,20 @@ typedef struct {
     __global const BvhNode *nodes, __global const Triangle *triangles, __global const TriangleInfo *infos, \
         __global const TriangleNormals *normals, __global const Material *materials,                    \
         __global const Light *lights, __global const float *light_cdf, __global const float4 *env_texels, \
-        __global const float *env_distribution, Camera camera, SceneInfo info
+        __global const float *env_distribution, __global const TriangleUV *uvs,                         \
+        __global const TextureInfo *texture_infos, __global const uint *texels, Camera camera, SceneInfo info
 
 #define SCENE_DATA_FROM_KERNEL_ARGS(rays)                                                               \
     scene_data(nodes, triangles, infos, normals, materials, lights, light_cdf, env_texels, env_distribution, \
-               camera, info, rays)
+               uvs, texture_infos, texels, camera, info, rays)
 
 inline SceneData scene_data(__global const BvhNode* nodes, __global const Triangle* triangles,
                             __global const TriangleInfo* infos, __global const TriangleNormals* normals,
                             __global const Material* materials, __global const Light* lights,
                             __global const float* light_cdf, __global const float4* env_texels,
-                            __global const float* env_distribution, Camera camera, SceneInfo info, uint* rays) {
+                            __global const float* env_distribution, __global const TriangleUV* uvs,
+                            __global const TextureInfo* texture_infos, __global const uint* texels, Camera camera,
+                            SceneInfo info, uint* rays) {
     SceneData s;
     s.nodes = nodes;
     s.triangles = triangles;
@@ -47,6 +55,13 @@ inline SceneData scene_data(__global const BvhNode* nodes, __global const Triang
     s.light_cdf = light_cdf;
     s.env_texels = env_texels;
     s.env_distribution = env_distribution;
+    s.uvs = uvs;
+    s.textures.infos = texture_infos;
+    s.textures.texels = texels;
+    s.cutouts.infos = infos;
+    s.cutouts.materials = materials;
+    s.cutouts.uvs = uvs;
+    s.cutouts.textures = s.textures;
     s.camera = camera;
     s.info = info;
     s.rays_traced = rays;

@@ -29,6 +29,9 @@ typedef struct {
     int delta;    /* sampled by a specular (delta) lobe */
     int material; /* surface: material index */
     int light;    /* light vertex: its light; surface: the area light of the triangle, or -1 */
+#ifdef HAS_TEXTURES
+    float2 uv;    /* surface: texture coordinates of the hit */
+#endif
 } PathVertex;
 
 inline int vertex_on_surface(const PathVertex* v) { return v->ng.x != 0.0f || v->ng.y != 0.0f || v->ng.z != 0.0f; }
@@ -60,7 +63,18 @@ inline int vertex_is_connectible(const SceneData* scene, const PathVertex* v) {
 }
 
 inline Bsdf vertex_bsdf(const SceneData* scene, const PathVertex* v) {
-    return bsdf_make(&scene->materials[v->material], v->ns, v->ng);
+    __global const Material* m = &scene->materials[v->material];
+    Bsdf b = bsdf_make(m, v->ns, v->ng);
+#ifdef HAS_TEXTURES
+    /* Maps multiply the constant reflectances (the MTL rule), clamped to [0, 1] so that a
+     * float texture cannot make a surface reflect more than it receives (kd + ks <= 1 holds
+     * for the constants, see mtl_materials.cpp). */
+    if (m->kd_texture)
+        b.kd *= clamp(texture_lookup(&scene->textures, m->kd_texture, v->uv).xyz, 0.0f, 1.0f);
+    if (m->ks_texture)
+        b.ks *= clamp(texture_lookup(&scene->textures, m->ks_texture, v->uv).xyz, 0.0f, 1.0f);
+#endif
+    return b;
 }
 
 /* Solid angle density at `v` toward `next` -> area density at `next` (seed 3.2, ConvertDensity). */
@@ -199,7 +213,7 @@ inline int vertices_visible(const SceneData* scene, const PathVertex* a, const P
     float dist = length(dir);
     if (!(dist > 0.0f)) return 0;
     ++*scene->rays_traced;
-    return !occluded(scene->nodes, scene->triangles, o, dir / dist, dist * (1.0f - SHADOW_RAY_SHORTEN));
+    return !occluded(scene->nodes, scene->triangles, &scene->cutouts, o, dir / dist, dist * (1.0f - SHADOW_RAY_SHORTEN));
 }
 
 /* Geometric term with visibility (pbrt bdpt.cpp G): cosines at both ends over distance^2. */

@@ -8,6 +8,9 @@
 
 #include "rng.h"
 #include "vertex.h"
+#ifdef HAS_BUMP_MAPS
+#include "bump.h"
+#endif
 
 /* Fills a surface vertex from a hit of a ray that left `prev`. */
 inline void surface_vertex_from_hit(const SceneData* scene, const PathVertex* prev, const Hit* hit, PathVertex* v) {
@@ -25,6 +28,13 @@ inline void surface_vertex_from_hit(const SceneData* scene, const PathVertex* pr
         /* The winding decides the front face (emitters, glass); the shading normal follows it. */
         if (n2 > 0.0f) v->ns = face_forward(n * rsqrt(n2), v->ng);
     }
+#endif
+#ifdef HAS_TEXTURES
+    v->uv = triangle_uv(scene->uvs, hit->triangle, hit->b1, hit->b2);
+#ifdef HAS_BUMP_MAPS
+    __global const Material* m = &scene->materials[info.material];
+    if (m->bump_texture) v->ns = bumped_normal(scene, tri, hit->triangle, m, v->uv, v->ns);
+#endif
 #endif
     v->wo = normalize(prev->p - v->p);
     v->delta = 0;
@@ -49,7 +59,7 @@ inline int random_walk(const SceneData* scene, Rng* rng, float3 o, float3 d, flo
     float pdf_fwd = pdf_dir;
     for (;;) {
         Hit hit;
-        int found = intersect(scene->nodes, scene->triangles, o, d, INFINITY, &hit);
+        int found = intersect(scene->nodes, scene->triangles, &scene->cutouts, o, d, INFINITY, &hit);
         ++*scene->rays_traced;
         if (is_black(beta)) break;
         PathVertex* vertex = &path[bounces];

@@ -623,7 +623,7 @@ void check_integrator(Integrator integrator, bool thin, uint64_t seed) {
         defines.push_back(d.rfind("INTEGRATOR=", 0) == 0 ? "INTEGRATOR=" + std::to_string(int(integrator)) : d);
     cl::Kernel k = test_kernel("kernels/mis_brute_force_test.cl", defines, "mis_weight_test");
     ts.buffers->set_args(k);
-    k.setArg(9, cam);
+    k.setArg(SceneBuffers::kCameraArg, cam);
     cl::Buffer vb = upload(vertices), cb = upload(cases), out = output_buffer<float>(cases.size());
     k.setArg(SceneBuffers::kSceneArgCount, vb);
     k.setArg(SceneBuffers::kSceneArgCount + 1, cb);

@@ -61,6 +61,29 @@ private:
     std::string path_;
 };
 
+// An OBJ (and files beside it, e.g. its MTL) written to a fresh folder.
+class TempObj {
+public:
+    explicit TempObj(const std::string& obj, const std::vector<std::pair<std::string, std::string>>& beside = {}) {
+        std::string test = ::testing::UnitTest::GetInstance()->current_test_info()->name();
+        for (char& c : test) c = c == '/' ? '_' : c;
+        dir_ = fs::temp_directory_path() / ("clbdpt_obj_test_" + std::to_string(::getpid()) + "_" + test);
+        fs::create_directories(dir_);
+        path_ = (dir_ / "model.obj").string();
+        std::ofstream(path_) << obj;
+        for (const auto& [name, text] : beside) std::ofstream(dir_ / name) << text;
+    }
+    ~TempObj() {
+        std::error_code ec;
+        fs::remove_all(dir_, ec);
+    }
+    const std::string& path() const { return path_; }
+
+private:
+    fs::path dir_;
+    std::string path_;
+};
+
 std::string quoted_mesh(const std::string& name) { return "\"" + data(name) + "\""; }
 
 int material_index(const Scene& scene, const std::string& name) {
@@ -222,28 +245,35 @@ TEST_F(MtlMapping, EnergyRescaledWithWarning) {
     expect_rgb(m.ks, 0.6f / 1.4f, 0.3f, 0.2f);
     int warnings = 0;
     for (const std::string& w : scene().warnings) {
-        if (w.find("\"too_bright\"") != std::string::npos) {
+        if (w.find("Kd + Ks above 1") != std::string::npos) {
             ++warnings;
+            EXPECT_CONTAINS(w, "1 material has");
             EXPECT_CONTAINS(w, "energy");
         }
     }
     EXPECT_EQ(warnings, 1);
 }
 
-TEST_F(MtlMapping, UnmappableFeaturesWarnOncePerMaterial) {
+TEST_F(MtlMapping, UnmappableFeaturesWarnOncePerKind) {
     int warnings = 0;
     for (const std::string& w : scene().warnings) {
-        if (w.find("\"textured\"") == std::string::npos) continue;
+        if (w.find("ignoring unsupported MTL features") == std::string::npos) continue;
         ++warnings;
-        EXPECT_CONTAINS(w, "map_Kd");
-        EXPECT_CONTAINS(w, "illum 3");
-        EXPECT_CONTAINS(w, "Tf");
+        EXPECT_CONTAINS(w, "illum 3 (1 material)");
+        EXPECT_CONTAINS(w, "Tf (1 material)");
     }
     EXPECT_EQ(warnings, 1);
-    // The textured material still maps its plain colour.
+    // Its map_Kd names a file that does not exist: one warning, and the plain colour is kept.
+    int missing = 0;
+    for (const std::string& w : scene().warnings) missing += w.find("1 texture missing or unreadable (first: 'wood.png')") != std::string::npos;
+    EXPECT_EQ(missing, 1);
     expect_rgb(material(scene(), "textured").kd, 0.5f, 0.5f, 0.5f);
-    // Only the energy rescale and the unmappable features warn; the scene has a light.
-    EXPECT_EQ(scene().warnings.size(), 2u);
+    EXPECT_EQ(material(scene(), "textured").kd_texture, 0);
+    EXPECT_TRUE(scene().textures.empty());
+    EXPECT_TRUE(scene().uvs.empty());
+    // Only the energy rescale, the unmappable features and the missing texture warn; the scene
+    // has a light.
+    EXPECT_EQ(scene().warnings.size(), 3u);
 }
 
 TEST_F(MtlMapping, EmissiveMirrorStaysEmissive) {
@@ -327,9 +357,23 @@ TEST(SceneJson, Defaults) {
     EXPECT_EQ(scene.render.seed, 0u);
     // No camera: framed like a bare OBJ.
     const float distance = std::sqrt(14.0f) / std::sin(0.5f * 39.3f * 3.14159265f / 180.0f);
-    expect_vec(scene.camera.eye, 0, 0, -distance);
+    expect_vec(scene.camera.eye, 0, 0, distance);
+    EXPECT_TRUE(scene.camera_is_automatic);
     expect_vec(scene.camera.target, 0, 0, 0);
     EXPECT_NEAR(scene.camera.focus_distance, distance, 1e-4f);
+    // No light: a uniform white environment is added, and said so.
+    ASSERT_EQ(scene.lights.size(), 1u);
+    EXPECT_EQ(scene.lights[0].kind, LightDesc::Kind::Environment);
+    expect_vec(scene.lights[0].color, 1, 1, 1);
+    ASSERT_EQ(scene.warnings.size(), 1u);
+    EXPECT_CONTAINS(scene.warnings[0], "scene has no lights: lit by a uniform white environment of radiance 1");
+}
+
+TEST(SceneJson, NoDefaultLightLeavesTheSceneDark) {
+    LoadOptions options;
+    options.default_light = false;
+    const Scene scene = load_scene(data("defaults.json"), options);
+    EXPECT_TRUE(scene.lights.empty());
     ASSERT_EQ(scene.warnings.size(), 1u);
     EXPECT_EQ(scene.warnings[0], "scene has no lights: the image will be black");
 }
@@ -338,8 +382,9 @@ TEST(SceneJson, PartialCameraKeepsFramingForTheRest) {
     TempScene t(R"({"camera": {"fov": 60}, "meshes": [)" + quoted_mesh("frame.obj") + "]}");
     const Scene scene = load_scene(t.path());
     const float distance = std::sqrt(14.0f) / std::sin(0.5f * 60.0f * 3.14159265f / 180.0f);
-    expect_vec(scene.camera.eye, 0, 0, -distance);
+    expect_vec(scene.camera.eye, 0, 0, distance);
     EXPECT_FLOAT_EQ(scene.camera.fov_degrees, 60.0f);
+    EXPECT_TRUE(scene.camera_is_automatic);
 }
 
 TEST(SceneJson, UnknownKeyNamesFileAndKeyPath) {
@@ -461,9 +506,15 @@ TEST(SceneErrors, MissingMesh) {
               "cannot open '" + data("no_such_mesh.obj") + "' (referenced by " + data("missing_mesh.json") + ")");
 }
 
-TEST(SceneErrors, MissingMtl) {
-    EXPECT_EQ(load_error(data("missing_mtl.obj")),
-              "cannot open '" + data("no_such_file.mtl") + "' (referenced by " + data("missing_mtl.obj") + ":2)");
+// A download often lacks its MTL: one warning naming it, and the faces render grey.
+TEST(SceneQuirks, MissingMtlWarnsAndRendersGrey) {
+    const Scene scene = load_scene(data("missing_mtl.obj"));
+    ASSERT_EQ(scene.triangles.size(), 1u);
+    EXPECT_EQ(scene.material_names[size_t(scene.infos[0].material)], "default");
+    int mentions = 0;
+    for (const std::string& w : scene.warnings) mentions += w.find("no_such_file.mtl") != std::string::npos;
+    EXPECT_EQ(mentions, 1);
+    EXPECT_CONTAINS(scene.warnings[0], data("missing_mtl.obj") + ":2: cannot open '" + data("no_such_file.mtl") + "'");
 }
 
 TEST(SceneErrors, NanVertexNamesLine) {
@@ -484,8 +535,44 @@ TEST(SceneErrors, OutOfRangeFaceNamesLine) {
     EXPECT_CONTAINS(load_error(data("out_of_range.obj")), data("out_of_range.obj") + ":5: vertex index 7 out of range");
 }
 
-TEST(SceneErrors, ZeroAreaTriangleNamesLine) {
-    EXPECT_EQ(load_error(data("zero_area.obj")), data("zero_area.obj") + ":7: zero-area triangle");
+// Slivers and repeated corners are dropped and counted in one warning line.
+TEST(SceneQuirks, ZeroAreaTrianglesAreDroppedAndCounted) {
+    const Scene scene = load_scene(data("zero_area.obj"));
+    EXPECT_EQ(scene.triangles.size(), 1u);
+    int mentions = 0;
+    for (const std::string& w : scene.warnings) {
+        if (w.find("degenerate") == std::string::npos) continue;
+        ++mentions;
+        EXPECT_EQ(w, data("zero_area.obj") + ": dropped 1 degenerate triangle (zero area)");
+    }
+    EXPECT_EQ(mentions, 1);
+}
+
+// A file of nothing but degenerate triangles has nothing to render.
+TEST(SceneErrors, OnlyDegenerateTrianglesIsAnError) {
+    TempObj t("v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\nf 1 1 2\n");
+    EXPECT_EQ(load_error(t.path()), t.path() + ": no triangles with a non-zero area");
+}
+
+// tinyobj's per-material messages ("Both `d` and `Tr`", unknown material names) and unsupported
+// keys collapse to one line per kind, however many materials repeat them.
+TEST(SceneQuirks, RepeatedWarningsCollapseToOneLineEach) {
+    std::string mtl, obj = "mtllib many.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\n";
+    for (int i = 0; i < 40; ++i) {
+        const std::string name = "m" + std::to_string(i);
+        mtl += "newmtl " + name + "\nKd 0.5 0.5 0.5\nd 1\nTr 0\nillum 4\nmap_Ke glow" + std::to_string(i) + ".png\n";
+        obj += "usemtl " + name + "\nf 1 2 3\nusemtl absent" + std::to_string(i) + "\nf 1 2 3\n";
+    }
+    TempObj t(obj, {{"many.mtl", mtl}});
+    const Scene scene = load_scene(t.path());
+    EXPECT_EQ(scene.triangles.size(), 80u);
+    EXPECT_LE(scene.warnings.size(), 4u);
+    for (const std::string& w : scene.warnings) EXPECT_EQ(w.find('\n'), std::string::npos) << w;
+    std::string all;
+    for (const std::string& w : scene.warnings) all += w + "\n";
+    EXPECT_CONTAINS(all, "illum 4 (40 materials)");
+    EXPECT_CONTAINS(all, "map_Ke (40 materials)");
+    EXPECT_CONTAINS(all, "(and 39 more like it)");
 }
 
 TEST(SceneErrors, EmptyObj) {
@@ -493,8 +580,8 @@ TEST(SceneErrors, EmptyObj) {
 }
 
 TEST(SceneErrors, ErrorsInsideAJsonSceneNameTheMesh) {
-    TempScene t(R"({"meshes": [)" + quoted_mesh("zero_area.obj") + "]}");
-    EXPECT_EQ(load_error(t.path()), data("zero_area.obj") + ":7: zero-area triangle");
+    TempScene t(R"({"meshes": [)" + quoted_mesh("out_of_range.obj") + "]}");
+    EXPECT_CONTAINS(load_error(t.path()), data("out_of_range.obj") + ":5: vertex index 7 out of range");
 }
 
 // ---- Bare OBJ scenes ---------------------------------------------------------------------
@@ -504,17 +591,18 @@ TEST(BareObj, CameraFramesTheBounds) {
     expect_vec(scene.bounds.lo, -1, -2, -3);
     expect_vec(scene.bounds.hi, 1, 2, 3);
     // Bounding sphere of radius sqrt(14) fits the 39.3 degree field of view exactly.
+    // OBJ's convention: the viewer on the +z side looking toward -z.
     const float distance = std::sqrt(14.0f) / std::sin(0.5f * 39.3f * 3.14159265f / 180.0f);
-    expect_vec(scene.camera.eye, 0, 0, -distance);
+    expect_vec(scene.camera.eye, 0, 0, distance);
     expect_vec(scene.camera.target, 0, 0, 0);
     expect_vec(scene.camera.up, 0, 1, 0);
     EXPECT_FLOAT_EQ(scene.camera.fov_degrees, 39.3f);
     EXPECT_FLOAT_EQ(scene.camera.lens_radius, 0.0f);
     EXPECT_EQ(scene.width, 256);
     EXPECT_EQ(scene.height, 256);
-    EXPECT_TRUE(scene.lights.empty());
+    ASSERT_EQ(scene.lights.size(), 1u);  // the default white environment
     ASSERT_EQ(scene.warnings.size(), 1u);
-    EXPECT_EQ(scene.warnings[0], "scene has no lights: the image will be black");
+    EXPECT_CONTAINS(scene.warnings[0], "scene has no lights: lit by a uniform white environment");
     EXPECT_EQ(scene.path, data("frame.obj"));
 }
 

@@ -20,7 +20,7 @@ __kernel void render_aov(__global const BvhNode* nodes, __global const Triangle*
     camera_generate_ray(&camera, raster, (float2)(0.5f, 0.5f), &o, &d);
     Hit hit;
     float3 value = (float3)(0.0f);
-    if (intersect(nodes, triangles, o, d, INFINITY, &hit)) {
+    if (intersect(nodes, triangles, 0, o, d, INFINITY, &hit)) {
         __global const Triangle* tri = &triangles[hit.triangle];
         float3 n = normalize(cross(xyz(tri->p1) - xyz(tri->p0), xyz(tri->p2) - xyz(tri->p0)));
         __global const Material* m = &materials[infos[hit.triangle].material];

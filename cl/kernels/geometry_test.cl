@@ -61,8 +61,8 @@ __kernel void offset_ray_test(SCENE_KERNEL_ARGS, __global const float4* in, __gl
     float3 w = in[2 * gid + 1].xyz;
     float3 o = offset_ray_origin(p, ng, w);
     Hit hit;
-    int found = intersect(nodes, triangles, o, w, INFINITY, &hit);
-    int blocked = occluded(nodes, triangles, o, w, INFINITY);
+    int found = intersect(nodes, triangles, 0, o, w, INFINITY, &hit);
+    int blocked = occluded(nodes, triangles, 0, o, w, INFINITY);
     out[2 * gid] = (float4)(o, found ? (float)hit.triangle : -1.0f);
     out[2 * gid + 1] = (float4)(p, (float)blocked);
 }

@@ -14,7 +14,7 @@ __kernel void trace_closest(__global const BvhNode* nodes, __global const Triang
     float4 o = ray_o[i];
     float4 d = ray_d[i];
     Hit hit;
-    intersect(nodes, tris, o.xyz, d.xyz, o.w, &hit);
+    intersect(nodes, tris, 0, o.xyz, d.xyz, o.w, &hit);
     out[i] = (float4)(hit.t, hit.b1, hit.b2, as_float(hit.triangle));
 }
 
@@ -26,5 +26,5 @@ __kernel void trace_any(__global const BvhNode* nodes, __global const Triangle* 
     if (i >= count) return;
     float4 o = ray_o[i];
     float4 d = ray_d[i];
-    occluded_out[i] = occluded(nodes, tris, o.xyz, d.xyz, o.w) ? 1 : 0;
+    occluded_out[i] = occluded(nodes, tris, 0, o.xyz, d.xyz, o.w) ? 1 : 0;
 }

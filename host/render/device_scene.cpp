@@ -102,6 +102,9 @@ DeviceScene build_device_scene(const Scene& scene, int width, int height) {
     ds.triangles = reorder(scene.triangles, bvh.order);
     ds.infos = reorder(scene.infos, bvh.order);
     ds.normals = scene.normals;
+    if (!scene.uvs.empty()) ds.uvs = reorder(scene.uvs, bvh.order);
+    ds.textures = scene.textures;
+    ds.texels = scene.texels;
     ds.materials = scene.materials;
     ds.camera = make_camera(scene.camera, width, height);
 

@@ -22,6 +22,9 @@ struct DeviceScene {
     std::vector<float> light_cdf;         // lights.size() + 1 entries
     std::vector<cl_float4> env_texels;    // env map, row 0 = +y
     std::vector<float> env_distribution;  // see cl/lights.h
+    std::vector<TriangleUV> uvs;          // BVH order; empty without textures
+    std::vector<TextureInfo> textures;
+    std::vector<uint32_t> texels;
     Camera camera{};
     SceneInfo info{};
     double bvh_build_seconds = 0;

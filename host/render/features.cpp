@@ -43,7 +43,13 @@ std::vector<std::string> kernel_defines(const DeviceScene& scene, Integrator int
         mirror |= m.kind == MATERIAL_MIRROR;
         glass |= m.kind == MATERIAL_GLASS;
     }
-    bool shading_normals = !scene.normals.empty();
+    bool textures = !scene.textures.empty();
+    bool cutouts = false, bump_maps = false;
+    for (const Material& m : scene.materials) {
+        cutouts |= textures && m.cutout_texture != 0;
+        bump_maps |= textures && m.bump_texture != 0;
+    }
+    bool shading_normals = !scene.normals.empty() || bump_maps;
     bool thin_lens = scene.camera.lens_radius > 0;
     bool env_map = scene.info.env_width > 0;
 
@@ -66,6 +72,11 @@ std::vector<std::string> kernel_defines(const DeviceScene& scene, Integrator int
     flag(mirror, "HAS_MIRROR");
     flag(glass, "HAS_GLASS");
     flag(shading_normals, "HAS_SHADING_NORMALS");
+    // Texture code reads buffers that exist only with textures: like the environment map, it
+    // stays off in "all features" builds of scenes without them.
+    if (textures) d.push_back("HAS_TEXTURES");
+    if (cutouts) d.push_back("HAS_CUTOUTS");
+    if (bump_maps) d.push_back("HAS_BUMP_MAPS");
     flag(thin_lens, "HAS_THIN_LENS");
     return d;
 }

@@ -21,13 +21,14 @@ SceneBuffers::SceneBuffers(cl::Context& context, const DeviceScene& scene) : sce
     buffers_ = {upload(context, scene.nodes),     upload(context, scene.triangles), upload(context, scene.infos),
                 upload(context, scene.normals),   upload(context, scene.materials), upload(context, scene.lights),
                 upload(context, scene.light_cdf), upload(context, scene.env_texels),
-                upload(context, scene.env_distribution)};
+                upload(context, scene.env_distribution), upload(context, scene.uvs),
+                upload(context, scene.textures),  upload(context, scene.texels)};
 }
 
 void SceneBuffers::set_args(cl::Kernel& kernel) const {
     for (size_t i = 0; i < buffers_.size(); ++i) kernel.setArg(cl_uint(i), buffers_[i]);
-    kernel.setArg(9, scene_.camera);
-    kernel.setArg(10, scene_.info);
+    kernel.setArg(kCameraArg, scene_.camera);
+    kernel.setArg(kCameraArg + 1, scene_.info);
 }
 
 }  // namespace clbdpt

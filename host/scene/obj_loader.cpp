@@ -104,7 +104,9 @@ std::string warning_kind(const std::string& message) {
             in_quotes = !in_quotes;
             if (in_quotes) kind += "Q";
         } else if (!in_quotes) {
-            kind += std::isdigit(static_cast<unsigned char>(c)) ? '#' : c;
+            const bool digit = std::isdigit(static_cast<unsigned char>(c));
+            if (!digit) kind += c;
+            else if (kind.empty() || kind.back() != '#') kind += '#';  // a number, however long
         }
     }
     return kind;
