@@ -34,10 +34,10 @@ inline float3 bumped_normal(const SceneData* scene, __global const Triangle* tri
     float3 bitangent = cross(ns, tangent);
     if (dot(bitangent, dpdv) < 0.0f) bitangent = -bitangent;
 
-    float3 local;
+    float3 n_tangent;
     if (m->bump_is_normal_map) {
         /* rgb = (n + 1) / 2 in the tangent frame (green toward +v, OpenGL's convention). */
-        local = texture_lookup(&scene->textures, m->bump_texture, uv).xyz * 2.0f - 1.0f;
+        n_tangent = texture_lookup(&scene->textures, m->bump_texture, uv).xyz * 2.0f - 1.0f;
     } else {
         /* Forward differences one texel apart in u and in v. */
         __global const TextureInfo* info = &scene->textures.infos[m->bump_texture - 1];
@@ -47,10 +47,10 @@ inline float3 bumped_normal(const SceneData* scene, __global const Triangle* tri
         float hu = texture_lookup(&scene->textures, m->bump_texture, uv + (float2)(du, 0.0f)).x;
         float hv = texture_lookup(&scene->textures, m->bump_texture, uv + (float2)(0.0f, dv)).x;
         float k = m->bump_scale * BUMP_HEIGHT_IN_TEXELS;
-        local = (float3)(-(hu - h) * k, -(hv - h) * k, 1.0f);
+        n_tangent = (float3)(-(hu - h) * k, -(hv - h) * k, 1.0f);
     }
-    if (!(local.z > 0.0f)) return ns; /* a normal below the surface: the map is broken there */
-    float3 n = local.x * tangent + local.y * bitangent + local.z * ns;
+    if (!(n_tangent.z > 0.0f)) return ns; /* a normal below the surface: the map is broken there */
+    float3 n = n_tangent.x * tangent + n_tangent.y * bitangent + n_tangent.z * ns;
     float n2 = length_squared(n);
     if (!(n2 > 0.0f) || !isfinite(n2)) return ns;
     return n * rsqrt(n2);
