@@ -152,6 +152,52 @@ TEST_F(CliTest, CameraOverridesAimTheView) {
     EXPECT_GT(narrow, 0.99);
 }
 
+// An axis-aligned box [lo, hi] as 12 triangles appended to OBJ text (vertex numbers continue
+// from *count).
+std::string box_obj(float x0, float y0, float z0, float x1, float y1, float z1, int* count) {
+    std::string obj;
+    for (int i = 0; i < 8; ++i)
+        obj += "v " + std::to_string(i & 1 ? x1 : x0) + " " + std::to_string(i & 2 ? y1 : y0) + " " +
+               std::to_string(i & 4 ? z1 : z0) + "\n";
+    const int quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+    for (const auto& q : quads)
+        obj += "f " + std::to_string(*count + q[0] + 1) + " " + std::to_string(*count + q[1] + 1) + " " +
+               std::to_string(*count + q[2] + 1) + " " + std::to_string(*count + q[3] + 1) + "\n";
+    *count += 8;
+    return obj;
+}
+
+// A model that encloses its content (a room with pillars: from outside, only a wall) gets a
+// camera inside, said in one note line; a solid block keeps the outside view.
+TEST_F(CliTest, EnclosingModelsAreViewedFromInside) {
+    int count = 0;
+    std::string room = box_obj(-10, 0, -6, 10, 5, 6, &count);
+    for (int i = -2; i <= 2; ++i) room += box_obj(i * 4.0f - 0.4f, 0, -3.4f, i * 4.0f + 0.4f, 5, -2.6f, &count);
+    for (int i = -2; i <= 2; ++i) room += box_obj(i * 4.0f - 0.4f, 0, 2.6f, i * 4.0f + 0.4f, 5, 3.4f, &count);
+    { std::ofstream(out("room.obj")) << room; }
+    count = 0;
+    { std::ofstream(out("block.obj")) << box_obj(-1, -1, -1, 1, 1, 1, &count); }
+
+    CommandResult inside = run("render " + out("room.obj") + " --aov depth --width 16 --height 16 -o " + out("r.exr"));
+    ASSERT_EQ(inside.status, 0) << inside.output;
+    EXPECT_NE(inside.output.find("camera placed inside"), std::string::npos) << inside.output;
+    int w = 0, h = 0;
+    std::vector<float> depth = clbdpt::read_image_rgb(out("r.exr"), &w, &h);
+    // From inside, every pixel sees a wall or a pillar closer than the room is long.
+    for (size_t i = 0; i < depth.size(); i += 3) {
+        EXPECT_GT(depth[i], 0.0f);
+        EXPECT_LT(depth[i], 25.0f);
+    }
+    CommandResult aimed = run("render " + out("room.obj") + " --lookat 0 2 30 0 2 0 0 1 0 --aov depth --width 8 --height 8 -o " +
+                              out("a.exr"));
+    ASSERT_EQ(aimed.status, 0) << aimed.output;
+    EXPECT_EQ(aimed.output.find("camera placed inside"), std::string::npos) << aimed.output;
+
+    CommandResult block = run("render " + out("block.obj") + " --aov depth --width 8 --height 8 -o " + out("b.exr"));
+    ASSERT_EQ(block.status, 0) << block.output;
+    EXPECT_EQ(block.output.find("camera placed inside"), std::string::npos) << block.output;
+}
+
 TEST_F(CliTest, AovRendersTheFirstHit) {
     CommandResult r = run("render " + data("materials.obj") + " --aov normal --width 16 --height 16 -o " + out("n.exr"));
     ASSERT_EQ(r.status, 0) << r.output;

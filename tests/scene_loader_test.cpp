@@ -71,7 +71,10 @@ public:
         fs::create_directories(dir_);
         path_ = (dir_ / "model.obj").string();
         std::ofstream(path_) << obj;
-        for (const auto& [name, text] : beside) std::ofstream(dir_ / name) << text;
+        for (const auto& [name, text] : beside) {
+            fs::create_directories((dir_ / name).parent_path());
+            std::ofstream(dir_ / name) << text;
+        }
     }
     ~TempObj() {
         std::error_code ec;
@@ -546,6 +549,22 @@ TEST(SceneQuirks, ZeroAreaTrianglesAreDroppedAndCounted) {
         EXPECT_EQ(w, data("zero_area.obj") + ": dropped 1 degenerate triangle (zero area)");
     }
     EXPECT_EQ(mentions, 1);
+}
+
+// Windows exporters: backslashes, ".\" prefixes and names whose case differs from the file's,
+// in `mtllib` and in texture maps (relative to the MTL's own folder).
+TEST(SceneQuirks, WindowsPathsFindTheirFiles) {
+    TempObj t("mtllib Materials\\Model.MTL\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\n"
+              "usemtl wood\nf 1/1 2/2 3/3\n",
+              {{"materials/model.mtl", "newmtl wood\nKd 1 1 1\nmap_Kd .\\Images\\WOOD.ppm\n"},
+               {"materials/images/wood.ppm", "P3\n1 1\n255\n255 128 0\n"}});
+    const Scene scene = load_scene(t.path());
+    ASSERT_EQ(scene.textures.size(), 1u);
+    EXPECT_EQ(scene.materials[size_t(scene.infos[0].material)].kd_texture, 1);
+    ASSERT_EQ(scene.uvs.size(), 1u);
+    EXPECT_EQ(scene.texels.size(), 1u);
+    EXPECT_EQ(scene.texels[0], 255u | 128u << 8 | 0u << 16 | 255u << 24);  // opaque, as stored
+    for (const std::string& w : scene.warnings) EXPECT_NE(w.find("no lights"), std::string::npos) << w;
 }
 
 // A file of nothing but degenerate triangles has nothing to render.

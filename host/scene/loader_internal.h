@@ -32,6 +32,8 @@ struct ObjPrescan {
         std::string shown;  // the path as the message shows it
     };
     std::vector<MissingFile> missing_mtllibs;  // `mtllib` files that cannot be opened
+    std::vector<std::string> mtl_paths;        // the `mtllib` files that exist, resolved, in order
+    std::string text;                          // the whole file
 };
 
 // Reads and validates `obj_path` (shown in messages as `display`). Throws Error
@@ -58,7 +60,8 @@ bool is_emissive(const Material& m);
 // prefixes and case differences tolerated); "" if no such file exists.
 std::string resolve_texture_path(const std::string& base_dir, const std::string& name);
 
-// Reads each texture image once into Scene::texels and adds one TextureInfo per use.
+// Reads each texture image once into Scene::texels and adds one TextureInfo per use. A name is
+// looked up in each of `base_dirs` in turn (the MTL's folder, then the OBJ's).
 class TextureLoader {
 public:
     struct Use {
@@ -67,7 +70,7 @@ public:
         bool alpha_has_holes = false;  // ... with some texel below 1/2
     };
     // colour: 8-bit texels are sRGB-encoded colour (else data: heights, normals, masks).
-    Use add(Scene& scene, const std::string& base_dir, const std::string& name,
+    Use add(Scene& scene, const std::vector<std::string>& base_dirs, const std::string& name,
             const tinyobj::texture_option_t& option, bool colour);
 
     std::vector<std::string> unreadable;  // references that could not be read, as written
@@ -82,8 +85,8 @@ private:
 };
 
 // Sets m's texture fields from the maps `mtl` names (the mapping table in mtl_textures.cpp).
-void attach_textures(Scene& scene, TextureLoader& loader, const std::string& base_dir, const tinyobj::material_t& mtl,
-                     Material* m);
+void attach_textures(Scene& scene, TextureLoader& loader, const std::vector<std::string>& base_dirs,
+                     const tinyobj::material_t& mtl, Material* m);
 
 // ---- obj_loader.cpp ----------------------------------------------------------------------
 

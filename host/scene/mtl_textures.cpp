@@ -8,8 +8,8 @@
 //                     first channel
 //   bump, map_bump    height field (-bm scales it), perturbs the shading normal
 //   norm              tangent-space normal map (rgb = (n + 1) / 2), replaces the shading normal
-// Options honoured per use: -s and -o (u and v), -clamp on, -bm. Paths are relative to the OBJ's
-// folder; Windows backslashes and a leading "./" or ".\" are accepted, and a name whose case
+// Options honoured per use: -s and -o (u and v), -clamp on, -bm. Paths are relative to the MTL's
+// folder (or the OBJ's); Windows backslashes and a leading "./" or ".\" are accepted, and a name whose case
 // does not match the file's (common in files made on Windows) is found by a case-blind look in
 // its folder. An image is read once however many materials use it.
 #include <algorithm>
@@ -89,9 +89,10 @@ std::string resolve_texture_path(const std::string& base_dir, const std::string&
     return is_file(resolved) ? resolved.string() : "";
 }
 
-TextureLoader::Use TextureLoader::add(Scene& scene, const std::string& base_dir, const std::string& name,
+TextureLoader::Use TextureLoader::add(Scene& scene, const std::vector<std::string>& base_dirs, const std::string& name,
                                       const tinyobj::texture_option_t& option, bool colour) {
-    const std::string path = resolve_texture_path(base_dir, name);
+    std::string path;
+    for (size_t i = 0; i < base_dirs.size() && path.empty(); ++i) path = resolve_texture_path(base_dirs[i], name);
     if (path.empty()) {
         unreadable.push_back(name);
         return {};
@@ -145,8 +146,8 @@ TextureLoader::Use TextureLoader::add(Scene& scene, const std::string& base_dir,
     return use;
 }
 
-void attach_textures(Scene& scene, TextureLoader& loader, const std::string& base_dir, const tinyobj::material_t& mtl,
-                     Material* m) {
+void attach_textures(Scene& scene, TextureLoader& loader, const std::vector<std::string>& base_dir,
+                     const tinyobj::material_t& mtl, Material* m) {
     TextureLoader::Use kd;
     if (!mtl.diffuse_texname.empty() && m->kind != MATERIAL_GLASS) {
         kd = loader.add(scene, base_dir, mtl.diffuse_texname, mtl.diffuse_texopt, true);

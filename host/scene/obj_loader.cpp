@@ -5,6 +5,7 @@
 #include <cctype>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <sstream>
 #include <string>
@@ -143,8 +144,17 @@ void append_obj_mesh(Scene& scene, MeshLoadContext& context, const std::string& 
     tinyobj::ObjReaderConfig config;
     config.triangulate = true;
     config.vertex_color = false;
+    // tinyobj gets the MTL text from us: prescan_obj resolved the `mtllib` names (backslashes,
+    // case) where tinyobj would look for them verbatim.
+    std::string mtl_text;
+    for (const std::string& mtl_path : scan.mtl_paths) {
+        std::ifstream in(mtl_path, std::ios::binary);
+        std::stringstream buffer;
+        buffer << in.rdbuf();
+        mtl_text += buffer.str() + "\n";
+    }
     tinyobj::ObjReader reader;
-    const bool ok = reader.ParseFromFile(obj_path, config);
+    const bool ok = reader.ParseFromString(scan.text, mtl_text, config);
     if (!ok || !reader.Error().empty()) {
         std::vector<std::string> lines = split_message_lines(reader.Error());
         throw Error(display + ": " + (lines.empty() ? std::string("tinyobj failed to parse the file") : lines[0]));
@@ -156,7 +166,10 @@ void append_obj_mesh(Scene& scene, MeshLoadContext& context, const std::string& 
     std::vector<std::string> parser_warnings;
     for (const std::string& line : split_message_lines(reader.Warning())) {
         // Said already, with its line, by the missing-mtllib warning above.
-        if (line.find("Material file [") != std::string::npos || line.find("Failed to load material") != std::string::npos)
+        // Said already (missing MTL), or an artefact of handing tinyobj all MTL text at once (a
+        // second `mtllib` line finds the text consumed).
+        if (line.find("Material file [") != std::string::npos || line.find("Failed to load material") != std::string::npos ||
+            line.find("Material stream in error state") != std::string::npos)
             continue;
         if (line.find("not found in .mtl") != std::string::npos) {
             if (!scan.missing_mtllibs.empty()) continue;  // the missing file says it all
@@ -180,7 +193,9 @@ void append_obj_mesh(Scene& scene, MeshLoadContext& context, const std::string& 
 
     // Materials: unsupported features are counted per kind over all materials of the file.
     const int material_base = static_cast<int>(scene.materials.size());
-    const std::string base_dir = std::filesystem::path(obj_path).parent_path().string();
+    std::vector<std::string> base_dirs;
+    for (const std::string& mtl_path : scan.mtl_paths) base_dirs.push_back(std::filesystem::path(mtl_path).parent_path().string());
+    base_dirs.push_back(std::filesystem::path(obj_path).parent_path().string());
     std::map<std::string, size_t> unsupported_count;
     std::vector<std::string> unsupported_order;
     size_t rescaled_count = 0;
@@ -189,7 +204,7 @@ void append_obj_mesh(Scene& scene, MeshLoadContext& context, const std::string& 
         std::vector<std::string> unsupported;
         bool rescaled = false;
         Material m = map_mtl_material(mtl, &unsupported, &rescaled);
-        attach_textures(scene, context.textures, base_dir, mtl, &m);
+        attach_textures(scene, context.textures, base_dirs, mtl, &m);
         for (const std::string& feature : unsupported) {
             if (unsupported_count[feature]++ == 0) unsupported_order.push_back(feature);
         }

@@ -2,6 +2,7 @@
 // must not be: "v 1.0 2.0" gets z = 0, "nan" parses as 0, a face index past the end only warns
 // and a negative one that resolves below 0 is used unchecked. Catching these here lets every
 // message name the file and line.
+#include <algorithm>
 #include <cctype>
 #include <cerrno>
 #include <climits>
@@ -110,13 +111,14 @@ bool parse_int(const std::string& s, long* value) {
     return errno == 0 && *value >= INT_MIN && *value <= INT_MAX;
 }
 
-// tinyobj's mtllib splitting: on spaces, with "\ " escaping a space inside a file name.
+// tinyobj's mtllib splitting: on spaces, with "\ " escaping a space inside a file name; any
+// other backslash is a Windows path separator and stays.
 std::vector<std::string> split_mtllib(const std::string& rest) {
     std::vector<std::string> names;
     std::string current;
     for (size_t i = 0; i < rest.size(); ++i) {
         char c = rest[i];
-        if (c == '\\' && i + 1 < rest.size()) {
+        if (c == '\\' && i + 1 < rest.size() && rest[i + 1] == ' ') {
             current += rest[++i];
         } else if (c == ' ' || c == '\t') {
             if (!current.empty()) names.push_back(current);
@@ -156,7 +158,8 @@ ObjPrescan prescan_obj(const std::string& obj_path, const std::string& display) 
     long texcoord_count = 0;
     std::vector<ForwardReference> forward;
 
-    const std::string text = buffer.str();
+    scan.text = buffer.str();
+    const std::string& text = scan.text;
     size_t pos = 0;
     std::string line_text;
     for (int line = 1; next_line(text, &pos, &line_text); ++line) {
@@ -235,9 +238,13 @@ ObjPrescan prescan_obj(const std::string& obj_path, const std::string& display) 
         } else if (keyword == "mtllib") {
             const size_t at = line_text.find("mtllib") + 6;
             for (const std::string& name : split_mtllib(line_text.substr(at))) {
-                fs::path file = fs::path(obj_path).parent_path() / name;
-                std::error_code ec;
-                if (!fs::is_regular_file(file, ec) || !std::ifstream(file)) {
+                // Windows exporters write "materials\\x.mtl" or ".\\x.mtl", and names whose
+                // case differs from the file's: resolved like texture paths.
+                const std::string file = resolve_texture_path(fs::path(obj_path).parent_path().string(), name);
+                if (!file.empty() && std::ifstream(file)) {
+                    if (std::find(scan.mtl_paths.begin(), scan.mtl_paths.end(), file) == scan.mtl_paths.end())
+                        scan.mtl_paths.push_back(file);
+                } else {
                     // A download often lacks its MTL: the loader warns and renders grey.
                     fs::path shown = fs::path(display).parent_path() / name;
                     scan.missing_mtllibs.push_back({line, shown.string()});
