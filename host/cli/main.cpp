@@ -229,9 +229,13 @@ int run_render(const RenderArgs& args) {
             std::fprintf(stderr, "clbdpt: note: %s\n", view.note.c_str());
         }
     }
+    const uint64_t texture_bytes = uint64_t(ds.texels.size()) * sizeof(uint32_t) +
+                                   uint64_t(ds.textures.size()) * sizeof(TextureInfo) +
+                                   uint64_t(ds.uvs.size()) * sizeof(TriangleUV);
     if (args.verbose)
-        std::fprintf(stderr, "clbdpt: device %s; %zu triangles, %zu BVH nodes (%.3f s), %zu lights\n",
-                     device_names.c_str(), ds.triangles.size(), ds.nodes.size(), ds.bvh_build_seconds, ds.lights.size());
+        std::fprintf(stderr, "clbdpt: device %s; %zu triangles, %zu BVH nodes (%.3f s), %zu lights, %zu textures (%.1f MiB)\n",
+                     device_names.c_str(), ds.triangles.size(), ds.nodes.size(), ds.bvh_build_seconds, ds.lights.size(),
+                     ds.textures.size(), double(texture_bytes) / double(1 << 20));
 
     ImageMetadata meta;
     meta.strings.push_back({"clbdpt:scene", args.scene});
@@ -300,6 +304,7 @@ int run_render(const RenderArgs& args) {
         j["devices"] = entries.size();
         j["triangles"] = ds.triangles.size();
         j["bvh_build_seconds"] = ds.bvh_build_seconds;
+        j["texture_bytes"] = texture_bytes;
         write_text_atomically(args.stats, j.dump(2) + "\n");
     }
     if (args.profile) {
