@@ -104,7 +104,7 @@ typedef struct {
     clbdpt_int cutout_channel; /* 3: alpha channel; 0: the first (grey) channel */
     clbdpt_int bump_texture;  /* bump / map_bump (a height field) or norm (a tangent-space normal map) */
     clbdpt_int bump_is_normal_map;
-    float bump_scale;         /* height map: MTL -bm, scene units per unit of texel value */
+    float bump_scale;         /* height map: MTL -bm, multiplies BUMP_HEIGHT_IN_TEXELS (cl/bump.h) */
 } Material;
 
 /* ---- Lights --------------------------------------------------------------------------- */

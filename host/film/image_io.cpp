@@ -167,6 +167,26 @@ std::vector<float> read_image_rgb(const std::string& path, int* width, int* heig
     return rgb;
 }
 
+namespace {
+
+// Reads all of `in` as `type` and spreads its channels to RGBA by `source` (the file channel
+// feeding r, g, b, a; -1: opaque). `opaque` is alpha's value of 1 in T.
+template <typename T>
+std::vector<T> read_rgba(OIIO::ImageInput& in, const std::string& path, OIIO::TypeDesc type, const int source[4],
+                         T opaque) {
+    const OIIO::ImageSpec& spec = in.spec();
+    const size_t pixels = size_t(spec.width) * size_t(spec.height), channels = size_t(spec.nchannels);
+    std::vector<T> all(pixels * channels);
+    if (!in.read_image(0, 0, 0, spec.nchannels, type, all.data()))
+        throw Error("cannot read '" + path + "': " + first_line(in.geterror(), "read failed"));
+    std::vector<T> rgba(pixels * 4);
+    for (size_t p = 0; p < pixels; ++p)
+        for (int c = 0; c < 4; ++c) rgba[p * 4 + size_t(c)] = source[c] < 0 ? opaque : all[p * channels + size_t(source[c])];
+    return rgba;
+}
+
+}  // namespace
+
 TextureImage read_texture_image(const std::string& path) {
     std::unique_ptr<OIIO::ImageInput> in = OIIO::ImageInput::open(path);
     if (!in) throw Error("cannot read '" + path + "': " + first_line(OIIO::geterror(), "cannot open"));
@@ -180,30 +200,13 @@ TextureImage read_texture_image(const std::string& path) {
     image.height = spec.height;
     image.is_float = spec.format.is_floating_point();
     image.has_alpha = channels == 2 || channels >= 4;
-    const size_t pixels = static_cast<size_t>(spec.width) * static_cast<size_t>(spec.height);
-    const size_t n = pixels * static_cast<size_t>(channels);
     // Which file channel feeds r, g, b, a (-1: alpha, opaque).
     int source[4] = {0, 1, 2, 3};
     if (channels < 3) source[1] = source[2] = 0;
     if (!image.has_alpha) source[3] = -1;
     else if (channels == 2) source[3] = 1;
-    if (image.is_float) {
-        std::vector<float> all(n);
-        if (!in->read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, all.data()))
-            throw Error("cannot read '" + path + "': " + first_line(in->geterror(), "read failed"));
-        image.rgba32f.resize(pixels * 4);
-        for (size_t p = 0; p < pixels; ++p)
-            for (int c = 0; c < 4; ++c)
-                image.rgba32f[p * 4 + size_t(c)] = source[c] < 0 ? 1.0f : all[p * size_t(channels) + size_t(source[c])];
-    } else {
-        std::vector<uint8_t> all(n);
-        if (!in->read_image(0, 0, 0, channels, OIIO::TypeDesc::UINT8, all.data()))
-            throw Error("cannot read '" + path + "': " + first_line(in->geterror(), "read failed"));
-        image.rgba8.resize(pixels * 4);
-        for (size_t p = 0; p < pixels; ++p)
-            for (int c = 0; c < 4; ++c)
-                image.rgba8[p * 4 + size_t(c)] = source[c] < 0 ? 255 : all[p * size_t(channels) + size_t(source[c])];
-    }
+    if (image.is_float) image.rgba32f = read_rgba<float>(*in, path, OIIO::TypeDesc::FLOAT, source, 1.0f);
+    else image.rgba8 = read_rgba<uint8_t>(*in, path, OIIO::TypeDesc::UINT8, source, uint8_t(255));
     in->close();
     return image;
 }

@@ -67,20 +67,27 @@ EyeProbe probe_eye(const DeviceScene& s, const Bounds3& b, Vec3 eye) {
     return p;
 }
 
-// Mean free distance (misses count as the diagonal) over a grid of rays filling the view.
-float view_depth(const DeviceScene& s, const Bounds3& b, Vec3 eye, Vec3 forward, float fov_degrees) {
-    const float diagonal = length(b.extent());
-    const Vec3 right = normalize(cross(forward, Vec3(0, 1, 0)));
-    const Vec3 up = cross(right, forward);
+// The kProbeGrid^2 unit directions through a square view along `forward` (up roughly `up`).
+std::vector<Vec3> view_directions(Vec3 forward, Vec3 up, float fov_degrees) {
+    const Vec3 right = normalize(cross(forward, up));
+    const Vec3 true_up = cross(right, forward);
     const float tan_half = std::tan(0.5f * fov_degrees * kPi / 180.0f);
-    double sum = 0;
+    std::vector<Vec3> directions;
     for (int y = 0; y < kProbeGrid; ++y)
         for (int x = 0; x < kProbeGrid; ++x) {
             const float sx = (2.0f * (float(x) + 0.5f) / kProbeGrid - 1.0f) * tan_half;
             const float sy = (2.0f * (float(y) + 0.5f) / kProbeGrid - 1.0f) * tan_half;
-            const Vec3 d = normalize(forward + right * sx + up * sy);
-            sum += std::min(diagonal, closest_hit_distance(s.nodes, s.triangles, eye, d));
+            directions.push_back(normalize(forward + right * sx + true_up * sy));
         }
+    return directions;
+}
+
+// Mean free distance (misses count as the diagonal) over a grid of rays filling the view.
+float view_depth(const DeviceScene& s, const Bounds3& b, Vec3 eye, Vec3 forward, float fov_degrees) {
+    const float diagonal = length(b.extent());
+    double sum = 0;
+    for (const Vec3& d : view_directions(forward, Vec3(0, 1, 0), fov_degrees))
+        sum += std::min(diagonal, closest_hit_distance(s.nodes, s.triangles, eye, d));
     return float(sum / double(kProbeGrid * kProbeGrid));
 }
 
@@ -94,18 +101,11 @@ AutomaticView choose_automatic_view(const CameraDesc& framed, const Bounds3& bou
 
     // 1. What the framed view shows: how deep behind the box's front face its hits lie.
     const Vec3 forward = normalize(framed.target - framed.eye);
-    const Vec3 right = normalize(cross(forward, framed.up));
-    const Vec3 up = cross(right, forward);
-    const float tan_half = std::tan(0.5f * framed.fov_degrees * kPi / 180.0f);
     std::vector<float> depths;
-    for (int y = 0; y < kProbeGrid; ++y)
-        for (int x = 0; x < kProbeGrid; ++x) {
-            const float sx = (2.0f * (float(x) + 0.5f) / kProbeGrid - 1.0f) * tan_half;
-            const float sy = (2.0f * (float(y) + 0.5f) / kProbeGrid - 1.0f) * tan_half;
-            const Vec3 d = normalize(forward + right * sx + up * sy);
-            const float t = closest_hit_distance(scene.nodes, scene.triangles, framed.eye, d);
-            if (std::isfinite(t)) depths.push_back((bounds.hi.z - (framed.eye + d * t).z) / extent.z);
-        }
+    for (const Vec3& d : view_directions(forward, framed.up, framed.fov_degrees)) {
+        const float t = closest_hit_distance(scene.nodes, scene.triangles, framed.eye, d);
+        if (std::isfinite(t)) depths.push_back((bounds.hi.z - (framed.eye + d * t).z) / extent.z);
+    }
     if (depths.empty()) return view;
     std::nth_element(depths.begin(), depths.begin() + long(depths.size() / 2), depths.end());
     if (depths[depths.size() / 2] > kWallDepth) return view;
