@@ -30,7 +30,10 @@ typedef struct {
     int material; /* surface: material index */
     int light;    /* light vertex: its light; surface: the area light of the triangle, or -1 */
 #ifdef HAS_TEXTURES
-    float2 uv;    /* surface: texture coordinates of the hit */
+    /* surface: the material's reflectances with its textures applied at the hit, looked up
+     * once when the vertex is made (vertex_bsdf runs many times per vertex: sampling, every
+     * connection, every MIS density) */
+    float3 kd, ks;
 #endif
 } PathVertex;
 
@@ -62,17 +65,24 @@ inline int vertex_is_connectible(const SceneData* scene, const PathVertex* v) {
     }
 }
 
-inline Bsdf vertex_bsdf(const SceneData* scene, const PathVertex* v) {
-    __global const Material* m = &scene->materials[v->material];
-    Bsdf b = bsdf_make(m, v->ns, v->ng);
 #ifdef HAS_TEXTURES
-    /* Maps multiply the constant reflectances (the MTL rule), clamped to [0, 1] so that a
-     * float texture cannot make a surface reflect more than it receives (kd + ks <= 1 holds
-     * for the constants, see mtl_materials.cpp). */
-    if (m->kd_texture)
-        b.kd *= clamp(texture_lookup(&scene->textures, m->kd_texture, v->uv).xyz, 0.0f, 1.0f);
-    if (m->ks_texture)
-        b.ks *= clamp(texture_lookup(&scene->textures, m->ks_texture, v->uv).xyz, 0.0f, 1.0f);
+/* A material's reflectances at texture coordinates uv: maps multiply the constants (the MTL
+ * rule), clamped to [0, 1] so that a float texture cannot make a surface reflect more than it
+ * receives (kd + ks <= 1 holds for the constants, see mtl_materials.cpp). */
+inline void textured_reflectances(const SceneData* scene, __global const Material* m, float2 uv, float3* kd,
+                                  float3* ks) {
+    *kd = xyz(m->kd);
+    *ks = xyz(m->ks);
+    if (m->kd_texture) *kd *= clamp(texture_lookup(&scene->textures, m->kd_texture, uv).xyz, 0.0f, 1.0f);
+    if (m->ks_texture) *ks *= clamp(texture_lookup(&scene->textures, m->ks_texture, uv).xyz, 0.0f, 1.0f);
+}
+#endif
+
+inline Bsdf vertex_bsdf(const SceneData* scene, const PathVertex* v) {
+    Bsdf b = bsdf_make(&scene->materials[v->material], v->ns, v->ng);
+#ifdef HAS_TEXTURES
+    b.kd = v->kd;
+    b.ks = v->ks;
 #endif
     return b;
 }

@@ -30,10 +30,11 @@ inline void surface_vertex_from_hit(const SceneData* scene, const PathVertex* pr
     }
 #endif
 #ifdef HAS_TEXTURES
-    v->uv = triangle_uv(scene->uvs, hit->triangle, hit->b1, hit->b2);
-#ifdef HAS_BUMP_MAPS
+    float2 uv = triangle_uv(scene->uvs, hit->triangle, hit->b1, hit->b2);
     __global const Material* m = &scene->materials[info.material];
-    if (m->bump_texture) v->ns = bumped_normal(scene, tri, hit->triangle, m, v->uv, v->ns);
+    textured_reflectances(scene, m, uv, &v->kd, &v->ks);
+#ifdef HAS_BUMP_MAPS
+    if (m->bump_texture) v->ns = bumped_normal(scene, tri, hit->triangle, m, uv, v->ns);
 #endif
 #endif
     v->wo = normalize(prev->p - v->p);

@@ -1,6 +1,6 @@
 // One OBJ mesh -> device triangles. The text is validated by prescan_obj first; tinyobj then
-// parses and triangulates it (fan for quads, ear clipping beyond, both keeping the winding), and
-// each triangle is checked for zero area and traced back to its `f` line for the message.
+// parses and triangulates it (fan for quads, ear clipping beyond, both keeping the winding).
+// Triangles of zero area, and faces that triangulate to nothing, are dropped and counted.
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -89,10 +89,6 @@ private:
     bool lost_ = false;
     std::vector<long> empty_faces_;
 };
-
-}  // namespace
-
-namespace {
 
 // tinyobj repeats some warnings once per material or per `usemtl` line ("Both `d` and `Tr`
 // parameters defined for \"x\"", "material [ 'x' ] not found in .mtl"): messages that differ
