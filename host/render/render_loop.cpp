@@ -30,6 +30,7 @@ Film render_image(const std::vector<Renderer*>& renderers, const RenderOptions& 
     std::atomic<bool> stop{false};
     std::vector<Film> films(renderers.size(), Film(camera.width, camera.height));
     const auto start = Clock::now();
+    std::atomic<double> first_pass_seconds{0.0};
 
     auto worker = [&](size_t d) {
         try {
@@ -39,7 +40,7 @@ Film render_image(const std::vector<Renderer*>& renderers, const RenderOptions& 
                 int pass = next_pass++;
                 if (!timed && pass >= options.spp) return;
                 renderers[d]->render_passes(films[d], uint32_t(pass), 1);
-                ++passes_done;
+                if (passes_done++ == 0) first_pass_seconds = seconds_since(start);
             }
         } catch (...) {
             std::lock_guard<std::mutex> lock(failure_mutex);
@@ -83,6 +84,7 @@ Film render_image(const std::vector<Renderer*>& renderers, const RenderOptions& 
         total.program_from_cache = total.program_from_cache && renderers[d]->stats().program_from_cache;
     }
     total.seconds = seconds;
+    total.first_pass_seconds = first_pass_seconds;
     if (stats) *stats = total;
     return film;
 }

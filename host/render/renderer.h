@@ -63,6 +63,7 @@ struct RenderProfile {
 
 struct RenderStats {
     double seconds = 0;           // wall time of the passes (excluding the kernel build)
+    double first_pass_seconds = 0; // wall time until the first pass was done
     RenderProfile profile;
     void add(const RenderStats& other) {
         profile.kernel_seconds += other.profile.kernel_seconds;

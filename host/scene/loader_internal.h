@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <map>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "scene/scene.h"
@@ -19,27 +20,35 @@ namespace clbdpt::detail {
 
 // ---- obj_prescan.cpp ---------------------------------------------------------------------
 
-// What the pre-scan learns about an OBJ file (faces and line numbers). tinyobj silently turns "nan" or a missing
-// coordinate into 0 and skips faces with bad indices, so every `v`, `vn`, `vt`, `f` and `mtllib`
-// line is checked here first, and the line numbers are kept to name the culprit later.
+// What the pre-scan learns about an OBJ file (vertex lines, face counts). tinyobj silently turns "nan" or a missing
+// coordinate into 0 and skips faces with bad indices, so every `v`, `vn`, `vt` and `f` line is
+// checked here too, and the line numbers are kept to name the culprit.
 struct ObjPrescan {
     std::vector<int> vertex_lines;     // source line of each `v`, in order
-    std::vector<int> face_lines;       // source line of each `f`, in order
-    std::vector<size_t> face_offsets;  // face f's corners: face_vertices[face_offsets[f]..[f+1])
-    std::vector<int> face_vertices;    // 0-based position index of every face corner
-    struct MissingFile {
+    size_t face_count = 0;             // `f` lines
+    size_t face_triangles = 0;         // triangles the faces make: n - 2 for n corners
+};
+
+// The whole file; throws Error("cannot open/read 'display'").
+std::string read_obj_text(const std::string& obj_path, const std::string& display);
+
+// Validates OBJ `text` (shown in messages as `display`). Throws Error "display:LINE: ..." on a
+// malformed or truncated line, a non-finite number or an index out of range.
+ObjPrescan prescan_obj(std::string_view text, const std::string& display);
+
+// The `mtllib` files `text` names, resolved next to `obj_path` (backslashes, "./" prefixes and
+// case differences tolerated): the ones that exist, in order, and the ones that do not, each
+// with its line, to be warned about.
+struct MaterialLibraries {
+    struct Missing {
         int line;
         std::string shown;  // the path as the message shows it
     };
-    std::vector<MissingFile> missing_mtllibs;  // `mtllib` files that cannot be opened
-    std::vector<std::string> mtl_paths;        // the `mtllib` files that exist, resolved, in order
-    std::string text;                          // the whole file
+    std::vector<std::string> paths;
+    std::vector<Missing> missing;
 };
-
-// Reads and validates `obj_path` (shown in messages as `display`). Throws Error
-// "display:LINE: ..." on a malformed or truncated line, a non-finite number, an index out of
-// range. A `mtllib` whose file cannot be opened is recorded, not an error.
-ObjPrescan prescan_obj(const std::string& obj_path, const std::string& display);
+MaterialLibraries find_material_libraries(std::string_view text, const std::string& obj_path,
+                                          const std::string& display);
 
 // ---- mtl_materials.cpp -------------------------------------------------------------------
 

@@ -1,4 +1,4 @@
-// One OBJ mesh -> device triangles. The text is validated by prescan_obj first; tinyobj then
+// One OBJ mesh -> device triangles. The text is validated by prescan_obj while tinyobj
 // parses and triangulates it (fan for quads, ear clipping beyond, both keeping the winding).
 // Triangles of zero area, and faces that triangulate to nothing, are dropped and counted.
 #include <algorithm>
@@ -6,6 +6,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <future>
 #include <map>
 #include <sstream>
 #include <string>
@@ -39,56 +40,6 @@ clbdpt_float4 point4(const Vec3& p) {
     return v;
 }
 
-// Follows tinyobj's output back to the `f` lines: tinyobj emits a face's triangles together and
-// faces in file order, and every triangle of a face uses only that face's corners.
-class FaceTracker {
-public:
-    explicit FaceTracker(const ObjPrescan& scan) : scan_(scan) {}
-
-    // The index of the face triangle (a, b, c) came from, or -1 once the trail is lost.
-    long face_of(int a, int b, int c) {
-        if (lost_) return -1;
-        const long face_count = static_cast<long>(scan_.face_lines.size());
-        while (face_ < face_count && !(emitted_ < corners(face_) - 2 && contains(face_, a, b, c))) {
-            if (emitted_ == 0) empty_faces_.push_back(face_);
-            ++face_;
-            emitted_ = 0;
-        }
-        if (face_ == face_count) {
-            lost_ = true;
-            return -1;
-        }
-        ++emitted_;
-        return face_;
-    }
-
-    // How many faces produced no triangle at all (tinyobj drops polygons whose ear clipping
-    // finds no ear, i.e. degenerate ones); 0 once the trail is lost.
-    size_t empty_face_count() {
-        if (lost_) return 0;
-        const long face_count = static_cast<long>(scan_.face_lines.size());
-        if (face_ < face_count && emitted_ == 0) empty_faces_.push_back(face_);
-        for (long f = face_ + 1; f < face_count; ++f) empty_faces_.push_back(f);
-        return empty_faces_.size();
-    }
-
-private:
-    long corners(long f) const {
-        return static_cast<long>(scan_.face_offsets[f + 1] - scan_.face_offsets[f]);
-    }
-    bool contains(long f, int a, int b, int c) const {
-        auto begin = scan_.face_vertices.begin() + static_cast<long>(scan_.face_offsets[f]);
-        auto end = scan_.face_vertices.begin() + static_cast<long>(scan_.face_offsets[f + 1]);
-        return std::find(begin, end, a) != end && std::find(begin, end, b) != end &&
-               std::find(begin, end, c) != end;
-    }
-
-    const ObjPrescan& scan_;
-    long face_ = 0;
-    long emitted_ = 0;
-    bool lost_ = false;
-    std::vector<long> empty_faces_;
-};
 
 // tinyobj repeats some warnings once per material or per `usemtl` line ("Both `d` and `Tr`
 // parameters defined for \"x\"", "material [ 'x' ] not found in .mtl"): messages that differ
@@ -134,28 +85,42 @@ std::string plural(size_t n, const std::string& one, const std::string& many) {
 void append_obj_mesh(Scene& scene, MeshLoadContext& context, const std::string& obj_path,
                      const std::string& display, const std::string& referenced_by) {
     require_readable_file(obj_path, display, referenced_by);
-    const ObjPrescan scan = prescan_obj(obj_path, display);
-    if (scan.face_lines.empty()) throw Error(display + ": no faces (an OBJ scene needs triangles)");
+    const std::string text = read_obj_text(obj_path, display);
+    const MaterialLibraries libraries = find_material_libraries(text, obj_path, display);
 
-    tinyobj::ObjReaderConfig config;
-    config.triangulate = true;
-    config.vertex_color = false;
-    // tinyobj gets the MTL text from us: prescan_obj resolved the `mtllib` names (backslashes,
-    // case) where tinyobj would look for them verbatim.
+    // tinyobj gets the MTL text from us: find_material_libraries resolved the `mtllib` names
+    // (backslashes, case) where tinyobj would look for them verbatim.
     std::string mtl_text;
-    for (const std::string& mtl_path : scan.mtl_paths) {
+    for (const std::string& mtl_path : libraries.paths) {
         std::ifstream in(mtl_path, std::ios::binary);
         std::stringstream buffer;
         buffer << in.rdbuf();
         mtl_text += buffer.str() + "\n";
     }
+    // Two parsers read the same text: tinyobj, which builds the mesh, and prescan_obj, which
+    // checks what tinyobj lets pass and keeps line numbers. They are independent, so tinyobj
+    // runs on a second thread (on large files each takes about half the load time). The
+    // prescan's verdict comes first: its errors name the line.
+    tinyobj::ObjReaderConfig config;
+    config.triangulate = true;
+    config.vertex_color = false;
     tinyobj::ObjReader reader;
-    const bool ok = reader.ParseFromString(scan.text, mtl_text, config);
+    std::future<bool> parsed =
+        std::async(std::launch::async, [&] { return reader.ParseFromString(text, mtl_text, config); });
+    ObjPrescan scan;
+    try {
+        scan = prescan_obj(text, display);
+    } catch (...) {
+        parsed.wait();
+        throw;
+    }
+    const bool ok = parsed.get();
+    if (scan.face_count == 0) throw Error(display + ": no faces (an OBJ scene needs triangles)");
     if (!ok || !reader.Error().empty()) {
         std::vector<std::string> lines = split_message_lines(reader.Error());
         throw Error(display + ": " + (lines.empty() ? std::string("tinyobj failed to parse the file") : lines[0]));
     }
-    for (const ObjPrescan::MissingFile& missing : scan.missing_mtllibs) {
+    for (const MaterialLibraries::Missing& missing : libraries.missing) {
         scene.warnings.push_back(display + ":" + std::to_string(missing.line) + ": cannot open '" + missing.shown +
                                  "'; its materials are replaced by the default grey diffuse");
     }
@@ -168,7 +133,7 @@ void append_obj_mesh(Scene& scene, MeshLoadContext& context, const std::string& 
             line.find("Material stream in error state") != std::string::npos)
             continue;
         if (line.find("not found in .mtl") != std::string::npos) {
-            if (!scan.missing_mtllibs.empty()) continue;  // the missing file says it all
+            if (!libraries.missing.empty()) continue;  // the missing file says it all
             parser_warnings.push_back(line + "; its faces use the \"default\" material");
             continue;
         }
@@ -190,7 +155,7 @@ void append_obj_mesh(Scene& scene, MeshLoadContext& context, const std::string& 
     // Materials: unsupported features are counted per kind over all materials of the file.
     const int material_base = static_cast<int>(scene.materials.size());
     std::vector<std::string> base_dirs;
-    for (const std::string& mtl_path : scan.mtl_paths) base_dirs.push_back(std::filesystem::path(mtl_path).parent_path().string());
+    for (const std::string& mtl_path : libraries.paths) base_dirs.push_back(std::filesystem::path(mtl_path).parent_path().string());
     base_dirs.push_back(std::filesystem::path(obj_path).parent_path().string());
     std::map<std::string, size_t> unsupported_count;
     std::vector<std::string> unsupported_order;
@@ -233,7 +198,12 @@ void append_obj_mesh(Scene& scene, MeshLoadContext& context, const std::string& 
         return Vec3(attrib.normals[3 * index], attrib.normals[3 * index + 1], attrib.normals[3 * index + 2]);
     };
 
-    FaceTracker tracker(scan);
+    size_t triangle_count = 0;
+    for (const tinyobj::shape_t& shape : reader.GetShapes()) triangle_count += shape.mesh.num_face_vertices.size();
+    scene.triangles.reserve(scene.triangles.size() + triangle_count);
+    scene.infos.reserve(scene.infos.size() + triangle_count);
+    if (!attrib.normals.empty()) scene.normals.reserve(scene.normals.size() + triangle_count);
+
     size_t flat_fallbacks = 0;
     size_t degenerate = 0;
     for (const tinyobj::shape_t& shape : reader.GetShapes()) {
@@ -251,7 +221,6 @@ void append_obj_mesh(Scene& scene, MeshLoadContext& context, const std::string& 
                     throw Error(display + ": face index out of range");
                 }
             }
-            tracker.face_of(vi[0], vi[1], vi[2]);
 
             // Slivers and repeated corners are routine in exported files (pbrt, Embree and
             // Mitsuba drop them too): they cover no area, so dropping them changes no image.
@@ -325,8 +294,9 @@ void append_obj_mesh(Scene& scene, MeshLoadContext& context, const std::string& 
         }
     }
 
-    // Faces whose ear clipping found no ear (degenerate polygons) produced no triangle.
-    degenerate += tracker.empty_face_count();
+    // A face of n corners makes n - 2 triangles; tinyobj makes none of a polygon whose ear
+    // clipping finds no ear (a degenerate one).
+    if (scan.face_triangles > triangle_count) degenerate += scan.face_triangles - triangle_count;
     if (degenerate > 0) {
         scene.warnings.push_back(display + ": dropped " +
                                  plural(degenerate, "degenerate triangle", "degenerate triangles") + " (zero area)");

@@ -4,6 +4,8 @@
 // message name the file and line.
 #include <algorithm>
 #include <cctype>
+#include <charconv>
+#include <string_view>
 #include <cerrno>
 #include <climits>
 #include <cmath>
@@ -26,34 +28,35 @@ namespace fs = std::filesystem;
 
 // Reads the next line from `text` at `*pos`, ending at the line breaks tinyobj recognises
 // ("\n", "\r\n" and a lone "\r") so that line numbers agree with tinyobj's own messages.
-bool next_line(const std::string& text, size_t* pos, std::string* line) {
+bool next_line(std::string_view text, size_t* pos, std::string_view* line) {
     if (*pos >= text.size()) return false;
     const size_t end = text.find_first_of("\r\n", *pos);
-    if (end == std::string::npos) {
-        line->assign(text, *pos, std::string::npos);
+    if (end == std::string_view::npos) {
+        *line = text.substr(*pos);
         *pos = text.size();
         return true;
     }
-    line->assign(text, *pos, end - *pos);
+    *line = text.substr(*pos, end - *pos);
     *pos = end + ((text[end] == '\r' && end + 1 < text.size() && text[end + 1] == '\n') ? 2 : 1);
     return true;
 }
 
-std::vector<std::string> split_tokens(const std::string& line) {
-    std::vector<std::string> tokens;
+// Splits `line` on blanks into `tokens` (views into the line; the vector is reused from line
+// to line, so a large file allocates nothing per line).
+void split_tokens(std::string_view line, std::vector<std::string_view>* tokens) {
+    tokens->clear();
     size_t i = 0;
     while (i < line.size()) {
         while (i < line.size() && (line[i] == ' ' || line[i] == '\t')) ++i;
         size_t start = i;
         while (i < line.size() && line[i] != ' ' && line[i] != '\t') ++i;
-        if (i > start) tokens.push_back(line.substr(start, i - start));
+        if (i > start) tokens->push_back(line.substr(start, i - start));
     }
-    return tokens;
 }
 
 // A plain decimal number: [+-] digits [. digits] [(e|E) [+-] digits], at least one digit in the
 // mantissa. strtod alone would also take "nan", "inf" and hex floats, which tinyobj reads as 0.
-bool is_decimal_number(const std::string& s) {
+bool is_decimal_number(std::string_view s) {
     size_t i = 0;
     if (i < s.size() && (s[i] == '+' || s[i] == '-')) ++i;
     size_t digits = 0;
@@ -73,47 +76,52 @@ bool is_decimal_number(const std::string& s) {
     return i == s.size();
 }
 
-bool names_non_finite(const std::string& s) {
-    std::string lower;
-    for (char c : s) lower += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    if (!lower.empty() && (lower[0] == '+' || lower[0] == '-')) lower.erase(0, 1);
-    return lower.rfind("nan", 0) == 0 || lower.rfind("inf", 0) == 0;
+bool names_non_finite(std::string_view s) {
+    if (!s.empty() && (s[0] == '+' || s[0] == '-')) s.remove_prefix(1);
+    if (s.size() < 3) return false;
+    auto is = [&](const char* word) {
+        for (int i = 0; i < 3; ++i)
+            if (std::tolower(static_cast<unsigned char>(s[size_t(i)])) != word[i]) return false;
+        return true;
+    };
+    return is("nan") || is("inf");
 }
 
-// Parses the numbers of a `v`/`vn`/`vt` line (tokens after the keyword, up to a comment) and
-// checks they are finite as floats, the precision tinyobj stores.
-std::vector<float> parse_numbers(const std::vector<std::string>& tokens, const std::string& display,
-                                 int line) {
-    std::vector<float> values;
+// Checks the numbers of a `v`/`vn`/`vt` line (tokens after the keyword, up to a comment) and
+// that they are finite as floats, the precision tinyobj stores. Returns how many there are.
+size_t check_numbers(const std::vector<std::string_view>& tokens, const std::string& display, int line) {
+    size_t count = 0;
     for (size_t i = 1; i < tokens.size(); ++i) {
-        const std::string& t = tokens[i];
+        const std::string_view t = tokens[i];
         if (t[0] == '#') break;
-        if (names_non_finite(t)) fail_at(display, line, "coordinate '" + t + "' is not finite");
-        if (!is_decimal_number(t)) fail_at(display, line, "bad number '" + t + "'");
-        float value = static_cast<float>(std::strtod(t.c_str(), nullptr));
-        if (!std::isfinite(value)) {
-            fail_at(display, line, "coordinate '" + t + "' is not finite (out of float range)");
+        if (names_non_finite(t)) fail_at(display, line, "coordinate '" + std::string(t) + "' is not finite");
+        if (!is_decimal_number(t)) fail_at(display, line, "bad number '" + std::string(t) + "'");
+        // is_decimal_number admits only what from_chars reads whole; a leading '+' it does not.
+        const std::string_view digits = t[0] == '+' ? t.substr(1) : t;
+        double value = 0.0;
+        const std::from_chars_result r = std::from_chars(digits.data(), digits.data() + digits.size(), value);
+        // Out of range is also what from_chars says of an underflow ("1e-400"), which strtod
+        // rounds to 0 as tinyobj will: ask strtod about those rare cases.
+        if (r.ec == std::errc::result_out_of_range) value = std::strtod(std::string(t).c_str(), nullptr);
+        if (!std::isfinite(static_cast<float>(value))) {
+            fail_at(display, line, "coordinate '" + std::string(t) + "' is not finite (out of float range)");
         }
-        values.push_back(value);
+        ++count;
     }
-    return values;
+    return count;
 }
 
-bool parse_int(const std::string& s, long* value) {
+bool parse_int(std::string_view s, long* value) {
     if (s.empty()) return false;
-    size_t i = (s[0] == '+' || s[0] == '-') ? 1 : 0;
-    if (i == s.size()) return false;
-    for (size_t k = i; k < s.size(); ++k) {
-        if (!std::isdigit(static_cast<unsigned char>(s[k]))) return false;
-    }
-    errno = 0;
-    *value = std::strtol(s.c_str(), nullptr, 10);
-    return errno == 0 && *value >= INT_MIN && *value <= INT_MAX;
+    if (s[0] == '+') s.remove_prefix(1);
+    if (s.empty() || s[0] == '+') return false;
+    const std::from_chars_result r = std::from_chars(s.data(), s.data() + s.size(), *value);
+    return r.ec == std::errc() && r.ptr == s.data() + s.size() && *value >= INT_MIN && *value <= INT_MAX;
 }
 
 // tinyobj's mtllib splitting: on spaces, with "\ " escaping a space inside a file name; any
 // other backslash is a Windows path separator and stays.
-std::vector<std::string> split_mtllib(const std::string& rest) {
+std::vector<std::string> split_mtllib(std::string_view rest) {
     std::vector<std::string> names;
     std::string current;
     for (size_t i = 0; i < rest.size(); ++i) {
@@ -146,33 +154,65 @@ std::string count_of(long n, const std::string& what) {
 
 }  // namespace
 
-ObjPrescan prescan_obj(const std::string& obj_path, const std::string& display) {
-    std::ifstream in(obj_path, std::ios::binary);
+std::string read_obj_text(const std::string& obj_path, const std::string& display) {
+    std::ifstream in(obj_path, std::ios::binary | std::ios::ate);
     if (!in) throw Error("cannot open '" + display + "'");
-    std::stringstream buffer;
-    buffer << in.rdbuf();
-    if (in.bad()) throw Error("cannot read '" + display + "'");
+    // Straight into one string of the file's size: a stringstream would copy a large file
+    // twice more (and the kernel's page zeroing of every copy dominates loading then).
+    const std::streamoff size = in.tellg();
+    if (size < 0) throw Error("cannot read '" + display + "'");
+    std::string text(static_cast<size_t>(size), '\0');
+    in.seekg(0);
+    if (!in.read(text.data(), size)) throw Error("cannot read '" + display + "'");
+    return text;
+}
 
+MaterialLibraries find_material_libraries(std::string_view text, const std::string& obj_path,
+                                          const std::string& display) {
+    MaterialLibraries libraries;
+    size_t pos = 0;
+    std::string_view line_text;
+    for (int line = 1; next_line(text, &pos, &line_text); ++line) {
+        const size_t first = line_text.find_first_not_of(" \t");
+        if (first == std::string_view::npos || line_text.compare(first, 6, "mtllib") != 0) continue;
+        const std::string_view rest = line_text.substr(first + 6);
+        if (!rest.empty() && rest[0] != ' ' && rest[0] != '\t') continue;  // "mtllibx" is another keyword
+        for (const std::string& name : split_mtllib(rest)) {
+            // Windows exporters write "materials\\x.mtl" or ".\\x.mtl", and names whose case
+            // differs from the file's: resolved like texture paths.
+            const std::string file = resolve_texture_path(fs::path(obj_path).parent_path().string(), name);
+            if (!file.empty() && std::ifstream(file)) {
+                if (std::find(libraries.paths.begin(), libraries.paths.end(), file) == libraries.paths.end())
+                    libraries.paths.push_back(file);
+            } else {
+                // A download often lacks its MTL: the loader warns and renders grey.
+                libraries.missing.push_back({line, (fs::path(display).parent_path() / name).string()});
+            }
+        }
+    }
+    return libraries;
+}
+
+ObjPrescan prescan_obj(std::string_view text, const std::string& display) {
     ObjPrescan scan;
     long normal_count = 0;
     long texcoord_count = 0;
     std::vector<ForwardReference> forward;
 
-    scan.text = buffer.str();
-    const std::string& text = scan.text;
     size_t pos = 0;
-    std::string line_text;
+    std::string_view line_text;
+    std::vector<std::string_view> tokens;
     for (int line = 1; next_line(text, &pos, &line_text); ++line) {
-        const std::vector<std::string> tokens = split_tokens(line_text);
+        split_tokens(line_text, &tokens);
         if (tokens.empty() || tokens[0][0] == '#') continue;
-        const std::string& keyword = tokens[0];
+        const std::string_view keyword = tokens[0];
 
         if (keyword == "v" || keyword == "vn") {
-            std::vector<float> values = parse_numbers(tokens, display, line);
-            if (values.size() < 3) {
+            const size_t values = check_numbers(tokens, display, line);
+            if (values < 3) {
                 fail_at(display, line,
                         std::string(keyword == "v" ? "vertex" : "normal") + " needs 3 coordinates, found " +
-                            std::to_string(values.size()) + " (truncated file?)");
+                            std::to_string(values) + " (truncated file?)");
             }
             if (keyword == "v") {
                 scan.vertex_lines.push_back(line);
@@ -180,7 +220,7 @@ ObjPrescan prescan_obj(const std::string& obj_path, const std::string& display) 
                 ++normal_count;
             }
         } else if (keyword == "vt") {
-            if (parse_numbers(tokens, display, line).empty()) {
+            if (check_numbers(tokens, display, line) == 0) {
                 fail_at(display, line, "texture coordinate needs at least 1 number, found 0");
             }
             ++texcoord_count;
@@ -192,35 +232,32 @@ ObjPrescan prescan_obj(const std::string& obj_path, const std::string& display) 
             }
             const long vertex_count = static_cast<long>(scan.vertex_lines.size());
             for (size_t k = 1; k < tokens.size(); ++k) {
-                const std::string& ref = tokens[k];
+                const std::string_view ref = tokens[k];
                 // v, v/vt, v//vn or v/vt/vn
-                std::vector<std::string> parts;
-                std::string part;
-                for (char c : ref) {
-                    if (c == '/') {
-                        parts.push_back(part);
-                        part.clear();
-                    } else {
-                        part += c;
-                    }
+                std::string_view parts[4];
+                size_t part_count = 0;
+                for (size_t start = 0;;) {
+                    const size_t slash = ref.find('/', start);
+                    if (part_count < 4) parts[part_count] = ref.substr(start, slash == std::string_view::npos ? slash : slash - start);
+                    ++part_count;
+                    if (slash == std::string_view::npos) break;
+                    start = slash + 1;
                 }
-                parts.push_back(part);
-                const bool shape_ok = parts.size() <= 3 && !parts[0].empty() &&
-                                      (parts.size() < 2 || !parts[1].empty() || parts.size() == 3) &&
-                                      (parts.size() < 3 || !parts[2].empty());
-                if (!shape_ok) fail_at(display, line, "bad vertex reference '" + ref + "'");
+                const bool shape_ok = part_count <= 3 && !parts[0].empty() &&
+                                      (part_count < 2 || !parts[1].empty() || part_count == 3) &&
+                                      (part_count < 3 || !parts[2].empty());
+                if (!shape_ok) fail_at(display, line, "bad vertex reference '" + std::string(ref) + "'");
 
                 const char* what[3] = {"vertex", "texture coordinate", "normal"};
                 const long counts[3] = {vertex_count, texcoord_count, normal_count};
-                long resolved_vertex = 0;
-                for (size_t p = 0; p < parts.size(); ++p) {
+                for (size_t p = 0; p < part_count; ++p) {
                     if (parts[p].empty()) continue;  // the vt of v//vn
                     long index = 0;
                     if (!parse_int(parts[p], &index)) {
-                        fail_at(display, line, "bad vertex reference '" + ref + "'");
+                        fail_at(display, line, "bad vertex reference '" + std::string(ref) + "'");
                     }
                     if (index == 0) {
-                        fail_at(display, line, "bad vertex reference '" + ref + "' (OBJ indices start at 1)");
+                        fail_at(display, line, "bad vertex reference '" + std::string(ref) + "' (OBJ indices start at 1)");
                     }
                     long zero_based = index > 0 ? index - 1 : counts[p] + index;
                     if (zero_based < 0) {
@@ -229,30 +266,12 @@ ObjPrescan prescan_obj(const std::string& obj_path, const std::string& display) 
                                     " out of range (" + count_of(counts[p], what[p]) + " defined so far)");
                     }
                     if (zero_based >= counts[p]) forward.push_back({line, what[p], index});
-                    if (p == 0) resolved_vertex = zero_based;
-                }
-                scan.face_vertices.push_back(static_cast<int>(resolved_vertex));
-            }
-            scan.face_lines.push_back(line);
-            scan.face_offsets.push_back(scan.face_vertices.size() - (tokens.size() - 1));
-        } else if (keyword == "mtllib") {
-            const size_t at = line_text.find("mtllib") + 6;
-            for (const std::string& name : split_mtllib(line_text.substr(at))) {
-                // Windows exporters write "materials\\x.mtl" or ".\\x.mtl", and names whose
-                // case differs from the file's: resolved like texture paths.
-                const std::string file = resolve_texture_path(fs::path(obj_path).parent_path().string(), name);
-                if (!file.empty() && std::ifstream(file)) {
-                    if (std::find(scan.mtl_paths.begin(), scan.mtl_paths.end(), file) == scan.mtl_paths.end())
-                        scan.mtl_paths.push_back(file);
-                } else {
-                    // A download often lacks its MTL: the loader warns and renders grey.
-                    fs::path shown = fs::path(display).parent_path() / name;
-                    scan.missing_mtllibs.push_back({line, shown.string()});
                 }
             }
+            ++scan.face_count;
+            scan.face_triangles += tokens.size() - 3;
         }
     }
-    scan.face_offsets.push_back(scan.face_vertices.size());
 
     const long totals[3] = {static_cast<long>(scan.vertex_lines.size()), texcoord_count, normal_count};
     for (const ForwardReference& ref : forward) {
