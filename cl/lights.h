@@ -38,10 +38,23 @@ inline float3 triangle_point(__global const Triangle* tri, float2 b) {
     return xyz(tri->p0) * (1.0f - b.x - b.y) + xyz(tri->p1) * b.x + xyz(tri->p2) * b.y;
 }
 
-/* Radiance leaving an area light at a point with geometric normal n in direction w:
+/* Radiance le leaving an area light at a point with geometric normal n, seen in direction w:
  * one-sided, the front face is the counter-clockwise one. */
-inline float3 area_light_radiance(__global const Light* light, float3 n, float3 w) {
-    return dot(n, w) > 0.0f ? xyz(light->emission) : (float3)(0.0f);
+inline float3 area_light_radiance(float3 le, float3 n, float3 w) {
+    return dot(n, w) > 0.0f ? le : (float3)(0.0f);
+}
+
+/* The radiance an area light emits at barycentrics b of its triangle: Ke, times its map_Ke
+ * there where the material has one (MTL's rule for maps). */
+inline float3 area_light_le(const SceneData* scene, __global const Light* light, float2 b) {
+#ifdef HAS_EMISSION_TEXTURES
+    __global const Material* m = &scene->materials[scene->infos[light->triangle].material];
+    if (m->ke_texture) {
+        float2 uv = triangle_uv(scene->uvs, light->triangle, b.x, b.y);
+        return xyz(light->emission) * fmax(texture_lookup(&scene->textures, m->ke_texture, uv).xyz, 0.0f);
+    }
+#endif
+    return xyz(light->emission);
 }
 
 /* ---- Spot falloff ---------------------------------------------------------------------- */
@@ -153,7 +166,8 @@ inline int light_sample_li(const SceneData* scene, int index, float3 ref, float2
 #ifdef HAS_AREA_LIGHTS
     case LIGHT_AREA: {
         __global const Triangle* tri = &scene->triangles[light->triangle];
-        ls->p = triangle_point(tri, sample_uniform_triangle(u));
+        float2 b = sample_uniform_triangle(u);
+        ls->p = triangle_point(tri, b);
         ls->n = triangle_normal(tri);
         float3 d = ls->p - ref;
         float d2 = length_squared(d);
@@ -162,7 +176,7 @@ inline int light_sample_li(const SceneData* scene, int index, float3 ref, float2
         float cos_light = fabs(dot(ls->n, ls->wi));
         if (cos_light == 0.0f) return 0;
         ls->pdf_w = d2 / (cos_light * light->area);
-        ls->li = area_light_radiance(light, ls->n, -ls->wi);
+        ls->li = area_light_radiance(area_light_le(scene, light, b), ls->n, -ls->wi);
         break;
     }
 #endif
@@ -230,14 +244,15 @@ inline int light_sample_le(const SceneData* scene, int index, float2 u_pos, floa
 #ifdef HAS_AREA_LIGHTS
     case LIGHT_AREA: {
         __global const Triangle* tri = &scene->triangles[light->triangle];
-        er->origin = triangle_point(tri, sample_uniform_triangle(u_pos));
+        float2 b = sample_uniform_triangle(u_pos);
+        er->origin = triangle_point(tri, b);
         er->n = triangle_normal(tri);
         Frame f = frame_from_normal(er->n);
         float3 w_local = sample_cosine_hemisphere(u_dir);
         er->dir = from_local(&f, w_local);
         er->pdf_pos = 1.0f / light->area;
         er->pdf_dir = cosine_hemisphere_pdf(w_local.z);
-        er->le = area_light_radiance(light, er->n, er->dir);
+        er->le = area_light_radiance(area_light_le(scene, light, b), er->n, er->dir);
         break;
     }
 #endif

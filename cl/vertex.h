@@ -35,6 +35,10 @@ typedef struct {
      * connection, every MIS density) */
     float3 kd, ks;
 #endif
+#ifdef HAS_EMISSION_TEXTURES
+    float3 le; /* on an area light (a light vertex, or a surface vertex on an emitter): the
+                  radiance emitted at this point, map_Ke applied */
+#endif
 } PathVertex;
 
 inline int vertex_on_surface(const PathVertex* v) { return v->ng.x != 0.0f || v->ng.y != 0.0f || v->ng.z != 0.0f; }
@@ -77,6 +81,15 @@ inline void textured_reflectances(const SceneData* scene, __global const Materia
     if (m->ks_texture) *ks *= clamp(texture_lookup(&scene->textures, m->ks_texture, uv).xyz, 0.0f, 1.0f);
 }
 #endif
+
+/* The radiance an emitter vertex (vertex_is_light, on an area light) emits at its point. */
+inline float3 vertex_area_le(const SceneData* scene, const PathVertex* v) {
+#ifdef HAS_EMISSION_TEXTURES
+    return v->le;
+#else
+    return xyz(scene->lights[v->light].emission);
+#endif
+}
 
 inline Bsdf vertex_bsdf(const SceneData* scene, const PathVertex* v) {
     Bsdf b = bsdf_make(&scene->materials[v->material], v->ns, v->ng);
@@ -122,7 +135,7 @@ inline float3 vertex_f(const SceneData* scene, const PathVertex* v, const PathVe
         return bsdf_f(&b, v->wo, wi) * correct_shading_normal(v, v->wo, wi, mode);
     }
     if (v->type == VERTEX_LIGHT && vertex_light_kind(scene, v) == LIGHT_AREA)
-        return area_light_radiance(&scene->lights[v->light], v->ng, wi);
+        return area_light_radiance(vertex_area_le(scene, v), v->ng, wi);
     return (float3)(0.0f);
 }
 
@@ -136,7 +149,7 @@ inline float3 vertex_le(const SceneData* scene, const PathVertex* v, const PathV
 #ifdef HAS_ENVIRONMENT
     if (v->type == VERTEX_LIGHT) return vertex_light_kind(scene, v) == LIGHT_ENVIRONMENT ? environment_radiance(scene, -w) : (float3)(0.0f);
 #endif
-    return area_light_radiance(&scene->lights[v->light], v->ng, w);
+    return area_light_radiance(vertex_area_le(scene, v), v->ng, w);
 }
 
 /* Solid-angle density of the environment light sampling direction -w, times its selection

@@ -37,6 +37,9 @@ inline void surface_vertex_from_hit(const SceneData* scene, const PathVertex* pr
     if (m->bump_texture) v->ns = bumped_normal(scene, tri, hit->triangle, m, uv, v->ns);
 #endif
 #endif
+#ifdef HAS_EMISSION_TEXTURES
+    if (info.light >= 0) v->le = area_light_le(scene, &scene->lights[info.light], (float2)(hit->b1, hit->b2));
+#endif
     v->wo = normalize(prev->p - v->p);
     v->delta = 0;
     v->material = info.material;
@@ -165,6 +168,10 @@ inline int generate_light_subpath(const SceneData* scene, Rng* rng, int max_dept
     lv->delta = 0;
     lv->material = -1;
     lv->light = light;
+#ifdef HAS_EMISSION_TEXTURES
+    /* Cosine-weighted emission leaves the front face: er.le is the unmasked radiance. */
+    lv->le = er.le;
+#endif
     float3 beta = er.le * (fabs(dot(er.n, er.dir)) / (select_pdf * er.pdf_pos * er.pdf_dir));
     float3 o = kind == LIGHT_AREA ? offset_ray_origin(er.origin, er.n, er.dir) : er.origin;
     int n = random_walk(scene, rng, o, er.dir, beta, er.pdf_dir, max_depth, TRANSPORT_IMPORTANCE, path + 1);

@@ -579,7 +579,7 @@ TEST(SceneQuirks, RepeatedWarningsCollapseToOneLineEach) {
     std::string mtl, obj = "mtllib many.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\n";
     for (int i = 0; i < 40; ++i) {
         const std::string name = "m" + std::to_string(i);
-        mtl += "newmtl " + name + "\nKd 0.5 0.5 0.5\nd 1\nTr 0\nillum 4\nmap_Ke glow" + std::to_string(i) + ".png\n";
+        mtl += "newmtl " + name + "\nKd 0.5 0.5 0.5\nd 1\nTr 0\nillum 4\nmap_Ns shine" + std::to_string(i) + ".png\n";
         obj += "usemtl " + name + "\nf 1 2 3\nusemtl absent" + std::to_string(i) + "\nf 1 2 3\n";
     }
     TempObj t(obj, {{"many.mtl", mtl}});
@@ -590,7 +590,7 @@ TEST(SceneQuirks, RepeatedWarningsCollapseToOneLineEach) {
     std::string all;
     for (const std::string& w : scene.warnings) all += w + "\n";
     EXPECT_CONTAINS(all, "illum 4 (40 materials)");
-    EXPECT_CONTAINS(all, "map_Ke (40 materials)");
+    EXPECT_CONTAINS(all, "map_Ns (40 materials)");
     EXPECT_CONTAINS(all, "(and 39 more like it)");
 }
 

@@ -4,6 +4,8 @@
 //     (orientation, sRGB decoding and the MTL's Kd multiplier included);
 //   - a cut-out (map_d) lets light through in shadow and connection rays exactly where the
 //     geometry would have a hole: the same image as the quad cut in half, for bdpt, pt and lt;
+//   - an emitter's map_Ke is seen directly by every strategy, and bdpt, pt and lt agree on
+//     the light it casts;
 //   - bdpt, pt and lt agree on a normal-mapped floor (the shading-normal correction holds);
 //   - an untextured scene's kernel carries no texture code.
 #include <gtest/gtest.h>
@@ -63,39 +65,41 @@ float srgb_to_linear(int code) {
 
 // ---- A textured quad seen head-on -------------------------------------------------------
 
-// The quad [-1,1]^2 at z = 0 facing +z, uv (0,0) at its lower left. The bare-OBJ camera frames
-// it from +z; a 90-degree view from (0, 0, 1) covers it exactly, so image = texture (row 0 on
-// top). Under the uniform white environment with max depth 1 the exitance of a lone Lambertian
-// quad is exactly its reflectance: the pixel's expected value is Kd x the texel.
-TEST(Textures, TexturedQuadImageIsItsTexture) {
-    TempFolder folder;
-    // 16 x 16, four solid 8 x 8 quadrants (bilinear filtering only blends along the middle).
-    const int codes[4][3] = {{200, 30, 30}, {30, 200, 30}, {30, 30, 200}, {128, 128, 128}};  // TL TR BL BR
+// 16 x 16, four solid 8 x 8 quadrants (bilinear filtering only blends along the middle).
+const int kQuadrantCodes[4][3] = {{200, 30, 30}, {30, 200, 30}, {30, 30, 200}, {128, 128, 128}};  // TL TR BL BR
+
+void write_checker(const TempFolder& folder, const std::string& name) {
     std::vector<unsigned char> texels;
     for (int y = 0; y < 16; ++y)
         for (int x = 0; x < 16; ++x)
-            for (int c = 0; c < 3; ++c) texels.push_back((unsigned char)codes[(y / 8) * 2 + x / 8][c]);
-    folder.write_png("checker.png", 16, 16, 3, texels);
-    folder.write("quad.mtl", "newmtl tex\nKd 0.5 1 1\nmap_Kd checker.png\n");
+            for (int c = 0; c < 3; ++c) texels.push_back((unsigned char)kQuadrantCodes[(y / 8) * 2 + x / 8][c]);
+    folder.write_png(name, 16, 16, 3, texels);
+}
+
+// The quad [-1,1]^2 at z = 0 facing +z with material `material` of quad.mtl, uv (0,0) at its
+// lower left, seen by a 90-degree view from (0, 0, 1) that covers it exactly: image = texture
+// (row 0 on top).
+DeviceScene head_on_quad(const TempFolder& folder, int film) {
     const std::string obj = folder.write("quad.obj",
                                          "mtllib quad.mtl\nv -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\n"
                                          "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nusemtl tex\nf 1/1 2/2 3/3 4/4\n");
     Scene scene = load_scene(obj);
-    ASSERT_EQ(scene.textures.size(), 1u);
-    ASSERT_EQ(scene.uvs.size(), 2u);
+    EXPECT_EQ(scene.textures.size(), 1u);
+    EXPECT_EQ(scene.uvs.size(), 2u);
     scene.camera.eye = Vec3(0, 0, 1);
     scene.camera.target = Vec3(0, 0, 0);
     scene.camera.fov_degrees = 90.0f;
-    const int film = 32;
-    DeviceScene ds = build_device_scene(scene, film, film);
-    const std::vector<std::string> defines = kernel_defines(ds, Integrator::Pt, 1, false, SamplerKind::Independent);
-    EXPECT_NE(std::find(defines.begin(), defines.end(), "HAS_TEXTURES"), defines.end());
+    return build_device_scene(scene, film, film);
+}
 
-    // Per pass: the mean of each channel over an 8 x 8 block of pixels inside each quadrant,
-    // clear of the blended middle and of the edges (the texture repeats, so bilinear filtering
-    // blends an edge texel with the opposite edge's).
+// Checks the mean of each channel over an 8 x 8 block of pixels inside each quadrant of a
+// 32 x 32 image (clear of the blended middle and of the edges: the texture repeats, so bilinear
+// filtering blends an edge texel with the opposite edge's) against scale x the texel, within
+// 4.5 standard errors of the pass-to-pass spread (12 comparisons).
+void expect_quadrants(const DeviceScene& ds, const RenderOptions& options, const float scale[3], const std::string& what) {
+    const int film = 32;
     const int passes = scaled_passes(24);
-    Renderer renderer(test_device(), ds, make_options(Integrator::Pt, 1, 7));
+    Renderer renderer(test_device(), ds, options);
     const int corner[4][2] = {{2, 2}, {22, 2}, {2, 22}, {22, 22}};  // TL TR BL BR (x, y)
     std::vector<double> sum(12, 0.0), sum2(12, 0.0);
     for (int pass = 0; pass < passes; ++pass) {
@@ -112,16 +116,46 @@ TEST(Textures, TexturedQuadImageIsItsTexture) {
                 sum2[q * 3 + c] += v * v;
             }
     }
-    // Tolerance: 12 comparisons at 4.5 standard errors of the pass-to-pass spread.
-    const float kd[3] = {0.5f, 1.0f, 1.0f};
     for (int q = 0; q < 4; ++q)
         for (int c = 0; c < 3; ++c) {
             const double mean = sum[q * 3 + c] / passes;
             const double var = std::max(0.0, sum2[q * 3 + c] / passes - mean * mean) * passes / (passes - 1);
             const double se = std::sqrt(var / passes) + 1e-6 * mean;
-            const double expected = kd[c] * srgb_to_linear(codes[q][c]);
-            EXPECT_NEAR(mean, expected, 4.5 * se) << "quadrant " << q << " channel " << c;
+            const double expected = scale[c] * srgb_to_linear(kQuadrantCodes[q][c]);
+            EXPECT_NEAR(mean, expected, 4.5 * se) << what << ": quadrant " << q << " channel " << c;
         }
+}
+
+bool has_define(const DeviceScene& ds, const std::string& define) {
+    const std::vector<std::string> d = kernel_defines(ds, Integrator::Bdpt, 3, false, SamplerKind::Independent);
+    return std::find(d.begin(), d.end(), define) != d.end();
+}
+
+// Under the uniform white environment with max depth 1 the exitance of a lone Lambertian quad
+// is exactly its reflectance: the pixel's expected value is Kd x the texel.
+TEST(Textures, TexturedQuadImageIsItsTexture) {
+    TempFolder folder;
+    write_checker(folder, "checker.png");
+    folder.write("quad.mtl", "newmtl tex\nKd 0.5 1 1\nmap_Kd checker.png\n");
+    const DeviceScene ds = head_on_quad(folder, 32);
+    EXPECT_TRUE(has_define(ds, "HAS_TEXTURES"));
+    const float kd[3] = {0.5f, 1.0f, 1.0f};
+    expect_quadrants(ds, make_options(Integrator::Pt, 1, 7), kd, "pt");
+}
+
+// An emitter with map_Ke seen directly shows Ke x the texel, whichever strategy finds it: the
+// camera ray hitting it (pt: s = 0), a point sampled on it joined to the lens (lt: (1,1)), or
+// both under MIS (bdpt).
+TEST(Textures, EmissionMapIsSeenByEveryStrategy) {
+    TempFolder folder;
+    write_checker(folder, "checker.png");
+    folder.write("quad.mtl", "newmtl tex\nKd 0 0 0\nKe 2 4 4\nmap_Ke checker.png\n");
+    const DeviceScene ds = head_on_quad(folder, 32);
+    EXPECT_TRUE(has_define(ds, "HAS_EMISSION_TEXTURES"));
+    const float ke[3] = {2.0f, 4.0f, 4.0f};
+    uint32_t seed = 31;
+    for (Integrator integrator : {Integrator::Bdpt, Integrator::Pt, Integrator::Lt})
+        expect_quadrants(ds, make_options(integrator, 0, seed++), ke, integrator_name(integrator));
 }
 
 // ---- Cut-outs ---------------------------------------------------------------------------
@@ -166,8 +200,7 @@ TEST(Textures, CutoutsLetLightThroughInEveryRayQuery) {
     const int film = 24;
     DeviceScene a = build_device_scene(with_cutout, film, film);
     DeviceScene b = build_device_scene(half, film, film);
-    const std::vector<std::string> defines = kernel_defines(a, Integrator::Bdpt, 3, false, SamplerKind::Independent);
-    EXPECT_NE(std::find(defines.begin(), defines.end(), "HAS_CUTOUTS"), defines.end());
+    EXPECT_TRUE(has_define(a, "HAS_CUTOUTS"));
 
     // Tolerance: 16 regions + the image mean per integrator, 4.5 combined standard errors.
     const int passes = scaled_passes(48);
@@ -180,6 +213,34 @@ TEST(Textures, CutoutsLetLightThroughInEveryRayQuery) {
         ASSERT_GT(sb.image_mean, 0.0);
         expect_agree(sa, sb, 4.5, name + ": cut-out vs geometry with the same hole");
     }
+}
+
+// A floor lit from above by an emitter whose map_Ke is the checker: light sampling (pt's s = 1),
+// emitted rays (lt, bdpt's light subpaths) and emitter hits must weigh the texture alike.
+TEST(Textures, BdptPtLtAgreeUnderATexturedEmitter) {
+    TempFolder folder;
+    write_checker(folder, "checker.png");
+    folder.write("room.mtl", "newmtl floor\nKd 0.7 0.7 0.7\nnewmtl light\nKd 0 0 0\nKe 8 8 8\nmap_Ke checker.png\n");
+    const std::string obj = folder.write(
+        "floor.obj",
+        "mtllib room.mtl\nv -2 0 -2\nv 2 0 -2\nv 2 0 2\nv -2 0 2\n"
+        "v -0.5 1.5 -0.5\nv 0.5 1.5 -0.5\nv 0.5 1.5 0.5\nv -0.5 1.5 0.5\n"
+        "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n"
+        "usemtl floor\nf 1 4 3 2\nusemtl light\nf 5/1 6/2 7/3 8/4\n");
+    Scene scene = load_scene(obj);
+    scene.camera.eye = Vec3(0, 3.5f, 3.5f);
+    scene.camera.target = Vec3(0, 0, 0);
+    scene.camera.fov_degrees = 60.0f;
+    const DeviceScene ds = build_device_scene(scene, 24, 24);
+    EXPECT_TRUE(has_define(ds, "HAS_EMISSION_TEXTURES"));
+    const int passes = scaled_passes(48);
+    RegionStats bdpt = render_stats_or_fail(ds, make_options(Integrator::Bdpt, 3, 41), passes, 4, "bdpt");
+    RegionStats pt = render_stats_or_fail(ds, make_options(Integrator::Pt, 3, 42), passes, 4, "pt");
+    RegionStats lt = render_stats_or_fail(ds, make_options(Integrator::Lt, 3, 43), passes, 4, "lt");
+    ASSERT_GT(bdpt.image_mean, 0.0);
+    expect_agree(bdpt, pt, 4.5, "emission map: bdpt vs pt");
+    expect_agree(bdpt, lt, 4.5, "emission map: bdpt vs lt");
+    expect_agree(pt, lt, 4.5, "emission map: pt vs lt");
 }
 
 // ---- Normal maps ------------------------------------------------------------------------
@@ -214,9 +275,8 @@ TEST(Textures, BdptPtLtAgreeOnANormalMappedFloor) {
     scene.camera.fov_degrees = 60.0f;
     const int film = 24;
     DeviceScene ds = build_device_scene(scene, film, film);
-    const std::vector<std::string> defines = kernel_defines(ds, Integrator::Bdpt, 3, false, SamplerKind::Independent);
-    EXPECT_NE(std::find(defines.begin(), defines.end(), "HAS_BUMP_MAPS"), defines.end());
-    EXPECT_NE(std::find(defines.begin(), defines.end(), "HAS_SHADING_NORMALS"), defines.end());
+    EXPECT_TRUE(has_define(ds, "HAS_BUMP_MAPS"));
+    EXPECT_TRUE(has_define(ds, "HAS_SHADING_NORMALS"));
 
     const int passes = scaled_passes(48);
     RegionStats bdpt = render_stats_or_fail(ds, make_options(Integrator::Bdpt, 3, 21), passes, 4, "bdpt");
@@ -240,6 +300,7 @@ TEST(Textures, UntexturedSceneHasNoTextureCode) {
             EXPECT_NE(d, "HAS_TEXTURES");
             EXPECT_NE(d, "HAS_CUTOUTS");
             EXPECT_NE(d, "HAS_BUMP_MAPS");
+            EXPECT_NE(d, "HAS_EMISSION_TEXTURES");
         }
     }
 }

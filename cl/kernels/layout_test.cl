@@ -16,7 +16,7 @@
         F(TextureInfo, format) F(TextureInfo, scale_u) F(TextureInfo, offset_v) F(TextureInfo, clamp) \
     S(Material) F(Material, kd) F(Material, ks) F(Material, ke) F(Material, kind)                 \
         F(Material, ior) F(Material, alpha) F(Material, pad0) F(Material, kd_texture)             \
-        F(Material, ks_texture) F(Material, pad1) F(Material, cutout_texture)               \
+        F(Material, ks_texture) F(Material, ke_texture) F(Material, cutout_texture)               \
         F(Material, cutout_channel) F(Material, bump_texture) F(Material, bump_is_normal_map)     \
         F(Material, bump_scale)                                                                   \
     S(Light) F(Light, position) F(Light, direction) F(Light, emission) F(Light, kind)             \

@@ -99,7 +99,7 @@ typedef struct {
      * A reflectance map multiplies kd or ks (the MTL rule). */
     clbdpt_int kd_texture;    /* map_Kd */
     clbdpt_int ks_texture;    /* map_Ks */
-    clbdpt_int pad1;
+    clbdpt_int ke_texture;    /* map_Ke: multiplies ke */
     clbdpt_int cutout_texture; /* alpha test (map_d, or map_Kd's alpha channel): below 1/2 is a hole */
     clbdpt_int cutout_channel; /* 3: alpha channel; 0: the first (grey) channel */
     clbdpt_int bump_texture;  /* bump / map_bump (a height field) or norm (a tangent-space normal map) */

@@ -66,6 +66,7 @@ CLBDPT_CHECK_FIELD(Material, ior, 52);
 CLBDPT_CHECK_FIELD(Material, alpha, 56);
 CLBDPT_CHECK_FIELD(Material, pad0, 60);
 CLBDPT_CHECK_FIELD(Material, kd_texture, 64);
+CLBDPT_CHECK_FIELD(Material, ke_texture, 72);
 CLBDPT_CHECK_FIELD(Material, cutout_texture, 76);
 CLBDPT_CHECK_FIELD(Material, bump_texture, 84);
 CLBDPT_CHECK_FIELD(Material, bump_scale, 92);

@@ -1,6 +1,9 @@
 #include "render/device_scene.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <map>
 #include <numeric>
 
 #include "util/error.h"
@@ -39,6 +42,34 @@ float build_cdf(const std::vector<float>& weights, float* cdf) {
     }
     cdf[n] = 1.0f;
     return float(total);
+}
+
+float srgb_to_linear(uint32_t code) {
+    const float c = float(code) / 255.0f;
+    return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f);
+}
+
+// Mean luminance of a texture's texels (linear), layout as in cl/shared/types.h.
+float texture_mean_luminance(const Scene& scene, int texture) {
+    const TextureInfo& t = scene.textures[size_t(texture - 1)];
+    const size_t count = size_t(t.width) * size_t(t.height);
+    double sum = 0;
+    for (size_t i = 0; i < count; ++i) {
+        Vec3 c;
+        if (t.format == TEXTURE_RGBA32F) {
+            const uint32_t* p = &scene.texels[t.offset + 4 * i];
+            float v[3];
+            std::memcpy(v, p, sizeof v);
+            c = Vec3(v[0], v[1], v[2]);
+        } else {
+            const uint32_t v = scene.texels[t.offset + i];
+            const uint32_t r = v & 255u, g = (v >> 8) & 255u, b = (v >> 16) & 255u;
+            c = t.format == TEXTURE_RGBA8_SRGB ? Vec3(srgb_to_linear(r), srgb_to_linear(g), srgb_to_linear(b))
+                                               : Vec3(float(r), float(g), float(b)) * (1.0f / 255.0f);
+        }
+        sum += std::max(0.0f, luminance(c));
+    }
+    return count ? float(sum / double(count)) : 0.0f;
 }
 
 }  // namespace
@@ -115,6 +146,16 @@ DeviceScene build_device_scene(const Scene& scene, int width, int height) {
     ds.info.environment_light = -1;
 
     std::vector<float> powers;
+    // Light selection is proportional to power; for a textured emitter the texture's mean
+    // luminance stands in for its mean over the triangle (any positive weight is unbiased:
+    // the same probabilities serve sampling and MIS).
+    std::map<int, float> texture_luminance;
+    auto emission_scale = [&](const Material& m) {
+        if (!m.ke_texture) return 1.0f;
+        auto it = texture_luminance.find(m.ke_texture);
+        if (it == texture_luminance.end()) it = texture_luminance.emplace(m.ke_texture, texture_mean_luminance(scene, m.ke_texture)).first;
+        return it->second;
+    };
     // Area lights: one per emissive triangle (one-sided, front = counter-clockwise).
     for (size_t i = 0; i < ds.triangles.size(); ++i) {
         TriangleInfo& info = ds.infos[i];
@@ -130,7 +171,7 @@ DeviceScene build_device_scene(const Scene& scene, int width, int height) {
         l.area = 0.5f * length(cross(e1, e2));
         info.light = int(ds.lights.size());
         ds.lights.push_back(l);
-        powers.push_back(luminance(vec3_of(m.ke)) * l.area * kPi);
+        powers.push_back(luminance(vec3_of(m.ke)) * emission_scale(m) * l.area * kPi);
     }
     for (const LightDesc& desc : scene.lights) {
         Light l{};

@@ -44,10 +44,11 @@ std::vector<std::string> kernel_defines(const DeviceScene& scene, Integrator int
         glass |= m.kind == MATERIAL_GLASS;
     }
     bool textures = !scene.textures.empty();
-    bool cutouts = false, bump_maps = false;
+    bool cutouts = false, bump_maps = false, emission_textures = false;
     for (const Material& m : scene.materials) {
         cutouts |= textures && m.cutout_texture != 0;
         bump_maps |= textures && m.bump_texture != 0;
+        emission_textures |= textures && m.ke_texture != 0;
     }
     bool shading_normals = !scene.normals.empty() || bump_maps;
     bool thin_lens = scene.camera.lens_radius > 0;
@@ -77,6 +78,7 @@ std::vector<std::string> kernel_defines(const DeviceScene& scene, Integrator int
     if (textures) d.push_back("HAS_TEXTURES");
     if (cutouts) d.push_back("HAS_CUTOUTS");
     if (bump_maps) d.push_back("HAS_BUMP_MAPS");
+    if (emission_textures) d.push_back("HAS_EMISSION_TEXTURES");
     flag(thin_lens, "HAS_THIN_LENS");
     return d;
 }

@@ -7,7 +7,7 @@
 //   Ke (any kind)                -> ke, radiance of a one-sided area light (front face = CCW)
 //
 // Texture maps are attached by mtl_textures.cpp. Anything else the MTL says and the renderer
-// cannot show (other illum models, a transmission filter, dissolve, map_Ke and other maps, the
+// cannot show (other illum models, a transmission filter, dissolve, map_Ns and other maps, the
 // PBR extras) is reported back to the loader, which warns once per kind with a count.
 #include <algorithm>
 #include <cmath>
@@ -55,13 +55,12 @@ clbdpt_float4 color(const tinyobj::real_t c[3], const char* key, std::vector<std
 
 // The features of `mtl` the renderer has no equivalent for, as MTL spells them.
 void collect_unsupported(const tinyobj::material_t& mtl, std::vector<std::string>* unsupported) {
-    // map_Kd, map_Ks, map_d, bump and norm are read (mtl_textures.cpp); map_Ka is ambient,
+    // map_Kd, map_Ks, map_Ke, map_d, bump and norm are read (mtl_textures.cpp); map_Ka is ambient,
     // which a physically based renderer has no use for, and is ignored without a word.
     const std::pair<const std::string*, const char*> textures[] = {
         {&mtl.specular_highlight_texname, "map_Ns"}, {&mtl.displacement_texname, "disp"},
         {&mtl.reflection_texname, "refl"},           {&mtl.roughness_texname, "map_Pr"},
         {&mtl.metallic_texname, "map_Pm"},           {&mtl.sheen_texname, "map_Ps"},
-        {&mtl.emissive_texname, "map_Ke"},
     };
     for (const auto& [name, key] : textures) {
         if (!name->empty()) unsupported->push_back(key);

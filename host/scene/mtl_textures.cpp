@@ -4,6 +4,8 @@
 //                     its alpha channel, where some texel is below 1/2 and no map_d is given,
 //                     is the material's cut-out
 //   map_Ks            multiplies Ks of a glossy or mirror material
+//   map_Ke            multiplies Ke (taken as 1 1 1 where the MTL gives the map but no Ke): an
+//                     emitter whose radiance varies over its surface
 //   map_d             cut-out (alpha test): the file's alpha channel if it has one, else its
 //                     first channel
 //   bump, map_bump    height field (-bm scales it), perturbs the shading normal
@@ -155,6 +157,11 @@ void attach_textures(Scene& scene, TextureLoader& loader, const std::vector<std:
     }
     if (!mtl.specular_texname.empty() && (m->kind == MATERIAL_GLOSSY || m->kind == MATERIAL_MIRROR))
         m->ks_texture = loader.add(scene, base_dir, mtl.specular_texname, mtl.specular_texopt, true).texture;
+    if (!mtl.emissive_texname.empty()) {
+        m->ke_texture = loader.add(scene, base_dir, mtl.emissive_texname, mtl.emissive_texopt, true).texture;
+        const bool no_ke = m->ke.s[0] <= 0 && m->ke.s[1] <= 0 && m->ke.s[2] <= 0;
+        if (m->ke_texture && no_ke) m->ke.s[0] = m->ke.s[1] = m->ke.s[2] = 1.0f;
+    }
     if (!mtl.alpha_texname.empty()) {
         const TextureLoader::Use d = loader.add(scene, base_dir, mtl.alpha_texname, mtl.alpha_texopt, false);
         m->cutout_texture = d.texture;
