@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "render/aov.h"
 #include "render/features.h"
 #include "test_scenes.h"
 
@@ -141,6 +142,23 @@ TEST(Textures, TexturedQuadImageIsItsTexture) {
     EXPECT_TRUE(has_define(ds, "HAS_TEXTURES"));
     const float kd[3] = {0.5f, 1.0f, 1.0f};
     expect_quadrants(ds, make_options(Integrator::Pt, 1, 7), kd, "pt");
+}
+
+// The albedo AOV shows the texture too (a deterministic first-hit lookup: the centre pixel of
+// each quadrant is Kd x its texel to float rounding).
+TEST(Textures, AlbedoAovShowsTheTexture) {
+    TempFolder folder;
+    write_checker(folder, "checker.png");
+    folder.write("quad.mtl", "newmtl tex\nKd 0.5 1 1\nmap_Kd checker.png\n");
+    const DeviceScene ds = head_on_quad(folder, 32);
+    const std::vector<float> albedo = render_aov(test_device(), ds, parse_aov("albedo"));
+    const float kd[3] = {0.5f, 1.0f, 1.0f};
+    const int centre[4][2] = {{8, 8}, {24, 8}, {8, 24}, {24, 24}};  // TL TR BL BR (x, y)
+    for (int q = 0; q < 4; ++q)
+        for (int c = 0; c < 3; ++c)
+            EXPECT_NEAR(albedo[(size_t(centre[q][1]) * 32 + size_t(centre[q][0])) * 3 + size_t(c)],
+                        kd[c] * srgb_to_linear(kQuadrantCodes[q][c]), 1e-5f)
+                << "quadrant " << q << " channel " << c;
 }
 
 // An emitter with map_Ke seen directly shows Ke x the texel, whichever strategy finds it: the

@@ -1,5 +1,7 @@
 #include "render/aov.h"
 
+#include "render/features.h"
+#include "render/scene_buffers.h"
 #include "util/error.h"
 
 namespace clbdpt {
@@ -13,29 +15,23 @@ int parse_aov(const std::string& name) {
 }
 
 std::vector<float> render_aov(DeviceContext& device, const DeviceScene& scene, int aov) {
-    const ProgramBuild& build = device.program("kernels/aov.cl", {});
+    // The scene's own feature flags: textures, cut-outs and bump maps show as they render.
+    const std::vector<std::string> defines =
+        kernel_defines(scene, Integrator::Bdpt, 1, false, SamplerKind::Independent);
+    const ProgramBuild& build = device.program("kernels/aov.cl", defines);
     const int pixels = scene.camera.width * scene.camera.height;
     std::vector<cl_float4> out(pixels);
     try {
         cl::Context& ctx = device.context();
-        auto ro = [&](const void* data, size_t bytes) {
-            return cl::Buffer(ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, bytes, const_cast<void*>(data));
-        };
-        cl::Buffer nodes = ro(scene.nodes.data(), sizeof(BvhNode) * scene.nodes.size());
-        cl::Buffer tris = ro(scene.triangles.data(), sizeof(Triangle) * scene.triangles.size());
-        cl::Buffer infos = ro(scene.infos.data(), sizeof(TriangleInfo) * scene.infos.size());
-        cl::Buffer materials = ro(scene.materials.data(), sizeof(Material) * scene.materials.size());
+        SceneBuffers buffers(ctx, scene);
         cl::Buffer result(ctx, CL_MEM_WRITE_ONLY, sizeof(cl_float4) * pixels);
         cl::Kernel kernel(build.program, "render_aov");
-        kernel.setArg(0, nodes);
-        kernel.setArg(1, tris);
-        kernel.setArg(2, infos);
-        kernel.setArg(3, materials);
-        kernel.setArg(4, scene.camera);
-        kernel.setArg(5, 0);
-        kernel.setArg(6, pixels);
-        kernel.setArg(7, aov);
-        kernel.setArg(8, result);
+        buffers.set_args(kernel);
+        cl_uint arg = SceneBuffers::kSceneArgCount;
+        kernel.setArg(arg++, 0);
+        kernel.setArg(arg++, pixels);
+        kernel.setArg(arg++, aov);
+        kernel.setArg(arg++, result);
         device.queue().enqueueNDRangeKernel(kernel, cl::NullRange, cl::NDRange(size_t(pixels)), cl::NullRange);
         device.queue().enqueueReadBuffer(result, CL_TRUE, 0, sizeof(cl_float4) * pixels, out.data());
     } catch (const cl::Error& e) {
