@@ -567,6 +567,24 @@ TEST(SceneQuirks, WindowsPathsFindTheirFiles) {
     for (const std::string& w : scene.warnings) EXPECT_NE(w.find("no lights"), std::string::npos) << w;
 }
 
+// Inline comments after data and `mtllib` names with unescaped spaces, as viewers' test files
+// and some exporters write them.
+TEST(SceneQuirks, InlineCommentsAndSpacesInMtllibNames) {
+    TempObj t("mtllib my materials.mtl missing one.mtl # where the colours are\n"
+              "v 0 0 0 # origin\nv 1 0 0\nv 0 1 0\nv 1 1 0\n"
+              "usemtl red\nf 1 2 3 # first\nf 2 4 3\n",
+              {{"my materials.mtl", "newmtl red\nKd 0.8 0.1 0.1\n"}});
+    const Scene scene = load_scene(t.path());
+    ASSERT_EQ(scene.triangles.size(), 2u);
+    EXPECT_EQ(scene.material_names[size_t(scene.infos[0].material)], "red");
+    std::string all;
+    for (const std::string& w : scene.warnings) all += w + "\n";
+    // "missing one.mtl" is two unknown tokens once "my materials.mtl" is found.
+    EXPECT_CONTAINS(all, "cannot open '" + (fs::path(t.path()).parent_path() / "missing").string() + "'");
+    EXPECT_CONTAINS(all, "cannot open '" + (fs::path(t.path()).parent_path() / "one.mtl").string() + "'");
+    EXPECT_EQ(all.find("where"), std::string::npos) << all;
+}
+
 // A file of nothing but degenerate triangles has nothing to render.
 TEST(SceneErrors, OnlyDegenerateTrianglesIsAnError) {
     TempObj t("v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\nf 1 1 2\n");

@@ -32,6 +32,11 @@ struct ObjPrescan {
 // The whole file; throws Error("cannot open/read 'display'").
 std::string read_obj_text(const std::string& obj_path, const std::string& display);
 
+// Blanks out inline comments on data lines ("f 1 2 3 # a note", which tinyobj refuses), in
+// place and keeping the line breaks, so line numbers stay. Elsewhere a '#' may belong to a
+// name ("usemtl Material #4"), so other lines are left alone.
+void blank_inline_comments(std::string* text);
+
 // Validates OBJ `text` (shown in messages as `display`). Throws Error "display:LINE: ..." on a
 // malformed or truncated line, a non-finite number or an index out of range.
 ObjPrescan prescan_obj(std::string_view text, const std::string& display);

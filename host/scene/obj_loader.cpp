@@ -85,7 +85,8 @@ std::string plural(size_t n, const std::string& one, const std::string& many) {
 void append_obj_mesh(Scene& scene, MeshLoadContext& context, const std::string& obj_path,
                      const std::string& display, const std::string& referenced_by) {
     require_readable_file(obj_path, display, referenced_by);
-    const std::string text = read_obj_text(obj_path, display);
+    std::string text = read_obj_text(obj_path, display);
+    blank_inline_comments(&text);
     const MaterialLibraries libraries = find_material_libraries(text, obj_path, display);
 
     // tinyobj gets the MTL text from us: find_material_libraries resolved the `mtllib` names

@@ -167,6 +167,22 @@ std::string read_obj_text(const std::string& obj_path, const std::string& displa
     return text;
 }
 
+void blank_inline_comments(std::string* text) {
+    for (size_t hash = text->find('#'); hash != std::string::npos; hash = text->find('#', hash + 1)) {
+        const size_t line_start = text->find_last_of("\r\n", hash) == std::string::npos
+                                      ? 0
+                                      : text->find_last_of("\r\n", hash) + 1;
+        const std::string_view line(text->data() + line_start, hash - line_start);
+        const size_t first = line.find_first_not_of(" \t");
+        if (first == std::string_view::npos) continue;  // a whole-line comment
+        const std::string_view keyword = line.substr(first, line.find_first_of(" \t", first) - first);
+        if (keyword != "v" && keyword != "vt" && keyword != "vn" && keyword != "f") continue;
+        const size_t end = text->find_first_of("\r\n", hash);
+        std::fill(text->begin() + long(hash), end == std::string::npos ? text->end() : text->begin() + long(end), ' ');
+        hash = end == std::string::npos ? text->size() - 1 : end;
+    }
+}
+
 MaterialLibraries find_material_libraries(std::string_view text, const std::string& obj_path,
                                           const std::string& display) {
     MaterialLibraries libraries;
@@ -175,20 +191,42 @@ MaterialLibraries find_material_libraries(std::string_view text, const std::stri
     for (int line = 1; next_line(text, &pos, &line_text); ++line) {
         const size_t first = line_text.find_first_not_of(" \t");
         if (first == std::string_view::npos || line_text.compare(first, 6, "mtllib") != 0) continue;
-        const std::string_view rest = line_text.substr(first + 6);
+        std::string_view rest = line_text.substr(first + 6);
         if (!rest.empty() && rest[0] != ' ' && rest[0] != '\t') continue;  // "mtllibx" is another keyword
-        for (const std::string& name : split_mtllib(rest)) {
-            // Windows exporters write "materials\\x.mtl" or ".\\x.mtl", and names whose case
-            // differs from the file's: resolved like texture paths.
-            const std::string file = resolve_texture_path(fs::path(obj_path).parent_path().string(), name);
-            if (!file.empty() && std::ifstream(file)) {
-                if (std::find(libraries.paths.begin(), libraries.paths.end(), file) == libraries.paths.end())
-                    libraries.paths.push_back(file);
-            } else {
-                // A download often lacks its MTL: the loader warns and renders grey.
-                libraries.missing.push_back({line, (fs::path(display).parent_path() / name).string()});
+        const size_t comment = rest.find('#');  // an inline comment, after a blank
+        if (comment != std::string_view::npos && comment > 0 && (rest[comment - 1] == ' ' || rest[comment - 1] == '\t'))
+            rest = rest.substr(0, comment);
+        // Names with unescaped spaces ("mtllib box mtllib red.mtl") are common: tokens are
+        // joined until they name an existing file (or the last one alone does); what never
+        // does is reported token by token. Windows exporters write "materials\\x.mtl" or
+        // ".\\x.mtl", and names whose case differs from the file's: resolved like texture paths.
+        const std::string obj_dir = fs::path(obj_path).parent_path().string();
+        auto existing = [&](const std::string& name) {
+            const std::string file = resolve_texture_path(obj_dir, name);
+            return !file.empty() && std::ifstream(file) ? file : std::string();
+        };
+        auto take = [&](const std::string& file) {
+            if (std::find(libraries.paths.begin(), libraries.paths.end(), file) == libraries.paths.end())
+                libraries.paths.push_back(file);
+        };
+        auto missing = [&](const std::string& name) {  // a download often lacks its MTL: warned
+            libraries.missing.push_back({line, (fs::path(display).parent_path() / name).string()});
+        };
+        std::vector<std::string> pending;
+        std::string pending_name;
+        for (const std::string& token : split_mtllib(rest)) {
+            pending.push_back(token);
+            pending_name += (pending_name.empty() ? "" : " ") + token;
+            std::string file = existing(pending_name);
+            if (file.empty() && pending.size() > 1 && !(file = existing(token)).empty()) {
+                for (size_t i = 0; i + 1 < pending.size(); ++i) missing(pending[i]);
             }
+            if (file.empty()) continue;
+            take(file);
+            pending.clear();
+            pending_name.clear();
         }
+        for (const std::string& name : pending) missing(name);
     }
     return libraries;
 }
