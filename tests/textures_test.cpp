@@ -132,6 +132,29 @@ bool has_define(const DeviceScene& ds, const std::string& define) {
     return std::find(d.begin(), d.end(), define) != d.end();
 }
 
+// A floor seen from above at 45 degrees, as the cut-out, emission and normal-map scenes below
+// are built: camera (0, 3.5, 3.5) looking at the origin, 60-degree view, 24 x 24 film.
+DeviceScene floor_view(const std::string& obj) {
+    Scene scene = load_scene(obj);
+    scene.camera.eye = Vec3(0, 3.5f, 3.5f);
+    scene.camera.target = Vec3(0, 0, 0);
+    scene.camera.fov_degrees = 60.0f;
+    return build_device_scene(scene, 24, 24);
+}
+
+// bdpt, pt and lt agree region by region and on the image mean within 4.5 combined standard
+// errors (16 regions + the mean, 3 pairs); the seeds are fixed.
+void expect_integrators_agree(const DeviceScene& ds, uint32_t seed, const std::string& what) {
+    const int passes = scaled_passes(48);
+    RegionStats bdpt = render_stats_or_fail(ds, make_options(Integrator::Bdpt, 3, seed), passes, 4, "bdpt");
+    RegionStats pt = render_stats_or_fail(ds, make_options(Integrator::Pt, 3, seed + 1), passes, 4, "pt");
+    RegionStats lt = render_stats_or_fail(ds, make_options(Integrator::Lt, 3, seed + 2), passes, 4, "lt");
+    ASSERT_GT(bdpt.image_mean, 0.0);
+    expect_agree(bdpt, pt, 4.5, what + ": bdpt vs pt");
+    expect_agree(bdpt, lt, 4.5, what + ": bdpt vs lt");
+    expect_agree(pt, lt, 4.5, what + ": pt vs lt");
+}
+
 // Under the uniform white environment with max depth 1 the exitance of a lone Lambertian quad
 // is exactly its reflectance: the pixel's expected value is Kd x the texel.
 TEST(Textures, TexturedQuadImageIsItsTexture) {
@@ -207,17 +230,9 @@ TEST(Textures, CutoutsLetLightThroughInEveryRayQuery) {
                  "newmtl floor\nKd 0.7 0.7 0.7\n"
                  "newmtl light\nKd 0 0 0\nKe 20 20 20\n"
                  "newmtl leaf\nKd 0.7 0.7 0.7\nmap_d -clamp on mask.png\n");
-    Scene with_cutout = load_scene(cutout_obj(folder, true));
-    Scene half = load_scene(cutout_obj(folder, false));
-    ASSERT_EQ(with_cutout.textures.size(), 1u);
-    for (Scene* s : {&with_cutout, &half}) {
-        s->camera.eye = Vec3(0, 3.5f, 3.5f);
-        s->camera.target = Vec3(0, 0, 0);
-        s->camera.fov_degrees = 60.0f;
-    }
-    const int film = 24;
-    DeviceScene a = build_device_scene(with_cutout, film, film);
-    DeviceScene b = build_device_scene(half, film, film);
+    const DeviceScene a = floor_view(cutout_obj(folder, true));
+    const DeviceScene b = floor_view(cutout_obj(folder, false));
+    ASSERT_EQ(a.textures.size(), 1u);
     EXPECT_TRUE(has_define(a, "HAS_CUTOUTS"));
 
     // Tolerance: 16 regions + the image mean per integrator, 4.5 combined standard errors.
@@ -245,20 +260,9 @@ TEST(Textures, BdptPtLtAgreeUnderATexturedEmitter) {
         "v -0.5 1.5 -0.5\nv 0.5 1.5 -0.5\nv 0.5 1.5 0.5\nv -0.5 1.5 0.5\n"
         "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n"
         "usemtl floor\nf 1 4 3 2\nusemtl light\nf 5/1 6/2 7/3 8/4\n");
-    Scene scene = load_scene(obj);
-    scene.camera.eye = Vec3(0, 3.5f, 3.5f);
-    scene.camera.target = Vec3(0, 0, 0);
-    scene.camera.fov_degrees = 60.0f;
-    const DeviceScene ds = build_device_scene(scene, 24, 24);
+    const DeviceScene ds = floor_view(obj);
     EXPECT_TRUE(has_define(ds, "HAS_EMISSION_TEXTURES"));
-    const int passes = scaled_passes(48);
-    RegionStats bdpt = render_stats_or_fail(ds, make_options(Integrator::Bdpt, 3, 41), passes, 4, "bdpt");
-    RegionStats pt = render_stats_or_fail(ds, make_options(Integrator::Pt, 3, 42), passes, 4, "pt");
-    RegionStats lt = render_stats_or_fail(ds, make_options(Integrator::Lt, 3, 43), passes, 4, "lt");
-    ASSERT_GT(bdpt.image_mean, 0.0);
-    expect_agree(bdpt, pt, 4.5, "emission map: bdpt vs pt");
-    expect_agree(bdpt, lt, 4.5, "emission map: bdpt vs lt");
-    expect_agree(pt, lt, 4.5, "emission map: pt vs lt");
+    expect_integrators_agree(ds, 41, "emission map");
 }
 
 // ---- Normal maps ------------------------------------------------------------------------
@@ -287,23 +291,10 @@ TEST(Textures, BdptPtLtAgreeOnANormalMappedFloor) {
         "v -0.2 2 -0.2\nv 0.2 2 -0.2\nv 0.2 2 0.2\nv -0.2 2 0.2\n"
         "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n"
         "usemtl floor\nf 1/1 4/4 3/3 2/2\nusemtl light\nf 5 6 7 8\n");
-    Scene scene = load_scene(obj);
-    scene.camera.eye = Vec3(0, 3.5f, 3.5f);
-    scene.camera.target = Vec3(0, 0, 0);
-    scene.camera.fov_degrees = 60.0f;
-    const int film = 24;
-    DeviceScene ds = build_device_scene(scene, film, film);
+    const DeviceScene ds = floor_view(obj);
     EXPECT_TRUE(has_define(ds, "HAS_BUMP_MAPS"));
     EXPECT_TRUE(has_define(ds, "HAS_SHADING_NORMALS"));
-
-    const int passes = scaled_passes(48);
-    RegionStats bdpt = render_stats_or_fail(ds, make_options(Integrator::Bdpt, 3, 21), passes, 4, "bdpt");
-    RegionStats pt = render_stats_or_fail(ds, make_options(Integrator::Pt, 3, 22), passes, 4, "pt");
-    RegionStats lt = render_stats_or_fail(ds, make_options(Integrator::Lt, 3, 23), passes, 4, "lt");
-    ASSERT_GT(bdpt.image_mean, 0.0);
-    expect_agree(bdpt, pt, 4.5, "normal map: bdpt vs pt");
-    expect_agree(bdpt, lt, 4.5, "normal map: bdpt vs lt");
-    expect_agree(pt, lt, 4.5, "normal map: pt vs lt");
+    expect_integrators_agree(ds, 21, "normal map");
 }
 
 // ---- Specialisation ---------------------------------------------------------------------

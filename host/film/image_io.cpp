@@ -134,14 +134,25 @@ void write_image(const std::string& path, int width, int height, const std::vect
     temp.release();
 }
 
-std::vector<float> read_image_rgb(const std::string& path, int* width, int* height) {
+namespace {
+
+// Opens an image file that must hold a 2D image; throws Error naming the file otherwise.
+std::unique_ptr<OIIO::ImageInput> open_2d_image(const std::string& path) {
     std::unique_ptr<OIIO::ImageInput> in = OIIO::ImageInput::open(path);
     if (!in) throw Error("cannot read '" + path + "': " + first_line(OIIO::geterror(), "cannot open"));
     const OIIO::ImageSpec& spec = in->spec();
-    const int channels = spec.nchannels;
-    if (spec.width <= 0 || spec.height <= 0 || channels <= 0 || spec.depth > 1) {
+    if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0 || spec.depth > 1) {
         throw Error("cannot read '" + path + "': not a 2D image");
     }
+    return in;
+}
+
+}  // namespace
+
+std::vector<float> read_image_rgb(const std::string& path, int* width, int* height) {
+    std::unique_ptr<OIIO::ImageInput> in = open_2d_image(path);
+    const OIIO::ImageSpec& spec = in->spec();
+    const int channels = spec.nchannels;
     const size_t pixels = static_cast<size_t>(spec.width) * static_cast<size_t>(spec.height);
     std::vector<float> all(pixels * static_cast<size_t>(channels));
     if (!in->read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, all.data())) {
@@ -188,13 +199,9 @@ std::vector<T> read_rgba(OIIO::ImageInput& in, const std::string& path, OIIO::Ty
 }  // namespace
 
 TextureImage read_texture_image(const std::string& path) {
-    std::unique_ptr<OIIO::ImageInput> in = OIIO::ImageInput::open(path);
-    if (!in) throw Error("cannot read '" + path + "': " + first_line(OIIO::geterror(), "cannot open"));
+    std::unique_ptr<OIIO::ImageInput> in = open_2d_image(path);
     const OIIO::ImageSpec& spec = in->spec();
     const int channels = spec.nchannels;
-    if (spec.width <= 0 || spec.height <= 0 || channels <= 0 || spec.depth > 1) {
-        throw Error("cannot read '" + path + "': not a 2D image");
-    }
     TextureImage image;
     image.width = spec.width;
     image.height = spec.height;
