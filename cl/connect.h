@@ -12,8 +12,9 @@
 
 #include "mis.h"
 #include "rng.h"
+#include "sample_dimensions.h"
 
-inline float3 connect_bdpt(const SceneData* scene, Rng* rng, const PathVertex* light_path,
+inline float3 connect_bdpt(const SceneData* scene, const StrategyMix* mix, Rng* rng, const PathVertex* light_path,
                            const PathVertex* camera_path, int s, int t, float2* raster, float* weight) {
     float3 L = (float3)(0.0f);
     PathVertex sampled;
@@ -27,6 +28,7 @@ inline float3 connect_bdpt(const SceneData* scene, Rng* rng, const PathVertex* l
         if (vertex_is_light(pt)) L = vertex_le(scene, pt, &camera_path[t - 2]) * pt->beta;
     } else if (t == 1) {
         const PathVertex* qs = &light_path[s - 1];
+        rng_seek(rng, sample_draw_lens_connection(s));
         float2 u = rng_next2(rng);
         if (!vertex_is_connectible(scene, qs)) return L;
         float3 lens_point, wi;
@@ -48,6 +50,7 @@ inline float3 connect_bdpt(const SceneData* scene, Rng* rng, const PathVertex* l
         }
     } else if (s == 1) {
         const PathVertex* pt = &camera_path[t - 1];
+        rng_seek(rng, sample_draw_light_connection(t));
         float u_light = rng_next(rng);
         float2 u = rng_next2(rng);
         if (!vertex_is_connectible(scene, pt) || scene->info.light_count == 0) return L;
@@ -77,7 +80,7 @@ inline float3 connect_bdpt(const SceneData* scene, Rng* rng, const PathVertex* l
         }
     }
     if (is_black(L)) return L;
-    *weight = mis_weight(scene, light_path, camera_path, &sampled, s, t);
+    *weight = mis_weight(scene, mix, light_path, camera_path, &sampled, s, t);
     return L;
 }
 

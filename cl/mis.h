@@ -21,10 +21,11 @@
  * are excluded by the delta tests anyway. */
 inline float remap0(float f) { return f != 0.0f ? f : 1.0f; }
 
-/* sampled: the vertex the connection sampled afresh (camera vertex for t = 1, light vertex for
+/* mix: the strategies in use and their sample counts (cl/strategies.h).
+ * sampled: the vertex the connection sampled afresh (camera vertex for t = 1, light vertex for
  * s = 1), ignored otherwise. */
-inline float mis_weight(const SceneData* scene, const PathVertex* light_path, const PathVertex* camera_path,
-                        const PathVertex* sampled, int s, int t) {
+inline float mis_weight(const SceneData* scene, const StrategyMix* mix, const PathVertex* light_path,
+                        const PathVertex* camera_path, const PathVertex* sampled, int s, int t) {
     /* The connection's endpoints: t = 1 replaces the camera vertex and (otherwise) s = 1 the
      * light vertex with the freshly sampled one; the subpath arrays are not read there (a path
      * tracer has no light subpath at all). */
@@ -50,6 +51,8 @@ inline float mis_weight(const SceneData* scene, const PathVertex* light_path, co
     if (s > 0) qs_pdf_rev = vertex_pdf(scene, &pt, pt_minus, &qs);
     if (qs_minus) qs_minus_pdf_rev = vertex_pdf(scene, &qs, &pt, qs_minus);
 
+    /* With sample counts n_i (cl/strategies.h) each term is n_i p_i / (n_s p_s). */
+    float inv_count = 1.0f / strategy_sample_count(mix, s, t);
     float sum_ri = 0.0f;
     /* Camera side: r_i for strategies (s + t - i, i), i = t-1 .. 1. */
     float ri = 1.0f;
@@ -58,7 +61,8 @@ inline float mis_weight(const SceneData* scene, const PathVertex* light_path, co
         float pdf_fwd = i == t - 1 ? pt.pdf_fwd : camera_path[i].pdf_fwd;
         int delta = i == t - 1 ? 0 : camera_path[i].delta;
         ri *= remap0(pdf_rev) / remap0(pdf_fwd);
-        if (!delta && !camera_path[i - 1].delta && strategy_enabled(s + t - i, i, light_is_area)) sum_ri += ri;
+        if (!delta && !camera_path[i - 1].delta && strategy_enabled(mix, s + t - i, i, light_is_area))
+            sum_ri += ri * strategy_sample_count(mix, s + t - i, i) * inv_count;
     }
     /* Light side: r_i for strategies (i, s + t - i), i = s-1 .. 0. */
     ri = 1.0f;
@@ -69,7 +73,8 @@ inline float mis_weight(const SceneData* scene, const PathVertex* light_path, co
         int delta_light_vertex = i > 0 ? light_path[i - 1].delta
                                        : vertex_is_delta_light(scene, s == 1 ? &qs : &light_path[0]);
         ri *= remap0(pdf_rev) / remap0(pdf_fwd);
-        if (!delta && !delta_light_vertex && strategy_enabled(i, s + t - i, light_is_area)) sum_ri += ri;
+        if (!delta && !delta_light_vertex && strategy_enabled(mix, i, s + t - i, light_is_area))
+            sum_ri += ri * strategy_sample_count(mix, i, s + t - i) * inv_count;
     }
     return 1.0f / (1.0f + sum_ri);
 }

@@ -4,8 +4,8 @@
  * its own (STYLE.md, "Tests that prove something").
  *
  * Two samplers (the kernel is built with one):
- *   independent (default)  a hash of (seed, pixel, sample, dimension): uniform random numbers;
- *   SAMPLER_SOBOL          padded Owen-scrambled Sobol (Burley 2020, "Practical Hash-based Owen
+ *   independent            a hash of (seed, pixel, sample, dimension): uniform random numbers;
+ *   SAMPLER_SOBOL (default) padded Owen-scrambled Sobol (Burley 2020, "Practical Hash-based Owen
  *                          Scrambling"; pbrt-v4 PaddedSobolSampler): every 1D or 2D draw gets its
  *                          own pair of the (0,2)-sequence — the first two Sobol dimensions —
  *                          with the sample index shuffled and the values Owen-scrambled by
@@ -28,7 +28,7 @@ inline uint hash_u32(uint x) {
 typedef struct {
     uint key;          /* hash of (seed, pixel); the sample index is mixed in per draw */
     uint sample_index;
-    uint dimension;    /* draws made so far */
+    uint dimension;    /* the next draw (cl/sample_dimensions.h) */
 } Rng;
 
 inline Rng rng_init(uint pixel, uint sample_index, uint seed) {
@@ -39,19 +39,8 @@ inline Rng rng_init(uint pixel, uint sample_index, uint seed) {
     return rng;
 }
 
-/* The stream of a light subpath. Light subpaths belong to no pixel (their t = 1 contributions
- * land anywhere), so they are numbered across the image, sample index major, and drawn from
- * one image-wide sequence: with the Sobol sampler the light subpaths of a pass are then
- * stratified as a set, which is what lowers the variance of the light image. (The 64-bit path
- * number's high word picks the scramble, so numbering never wraps onto itself.) */
-inline Rng rng_init_light_subpath(uint pixel, uint pixel_count, uint sample_index, uint seed) {
-    ulong n = (ulong)sample_index * (ulong)pixel_count + (ulong)pixel;
-    Rng rng;
-    rng.key = hash_u32(hash_u32(seed ^ 0x2545f491u) ^ hash_u32((uint)(n >> 32) + 0x3c6ef372u));
-    rng.sample_index = (uint)n;
-    rng.dimension = 0;
-    return rng;
-}
+/* Moves the stream to draw `draw` of the sample vector (cl/sample_dimensions.h). */
+inline void rng_seek(Rng* rng, uint draw) { rng->dimension = draw; }
 
 /* 32 random bits -> [0, 1): the top 24 bits, so 1.0f can never come out. */
 inline float bits_to_unit_float(uint bits) { return (float)(bits >> 8) * (1.0f / 16777216.0f); }
@@ -121,17 +110,18 @@ inline float2 rng_next2(Rng* rng) {
 
 #else
 
-inline float rng_next(Rng* rng) {
+/* Component c of draw d: a hash of (seed, pixel, sample, d, c). A 2D draw is one draw, as in
+ * the Sobol sampler, so both samplers follow the same table of draws. */
+inline float independent_value(const Rng* rng, uint draw, uint component) {
     uint sample_key = hash_u32(rng->key ^ hash_u32(rng->sample_index + 0x68e31da4u));
-    uint bits = hash_u32(sample_key ^ hash_u32(rng->dimension * 0x9e3779b9u + 0x632be5abu));
-    rng->dimension++;
-    return bits_to_unit_float(bits);
+    return bits_to_unit_float(hash_u32(sample_key ^ hash_u32((2u * draw + component) * 0x9e3779b9u + 0x632be5abu)));
 }
 
+inline float rng_next(Rng* rng) { return independent_value(rng, rng->dimension++, 0u); }
+
 inline float2 rng_next2(Rng* rng) {
-    float a = rng_next(rng);
-    float b = rng_next(rng);
-    return (float2)(a, b);
+    uint draw = rng->dimension++;
+    return (float2)(independent_value(rng, draw, 0u), independent_value(rng, draw, 1u));
 }
 
 #endif

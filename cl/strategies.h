@@ -1,14 +1,24 @@
 /* Which (s, t) strategies an integrator uses: s light subpath vertices joined to t camera
  * subpath vertices. The MIS weight sums over exactly the enabled strategies, so every set
  * is unbiased on the paths it can reach.
- *   INTEGRATOR_BDPT  every strategy
+ *   INTEGRATOR_BDPT  every strategy the strategy mix allows (below)
  *   INTEGRATOR_PT    s <= 1, t >= 2: a path tracer with next-event estimation
  *   INTEGRATOR_LT    t == 1: a light tracer
  * The (1,1) strategy (a point sampled on a light joined straight to a sampled lens point) is
  * what lets a light tracer show emitters seen directly; pbrt-v3 leaves it out. Here it is on
  * for bdpt and lt, but only for area lights: point and spot lights are not visible to the
  * camera in any strategy set (no camera path can hit them), and for lights at infinity the
- * strategy has measure zero. */
+ * strategy has measure zero.
+ *
+ * The strategy mix (efficiency-aware BDPT; Grittmann, Yazici, Georgiev & Slusallek 2022): a
+ * pixel sample traces one camera subpath and, with probability light_subpaths, one light
+ * subpath. Strategies that use the light subpath (s >= 2, and t = 1) then have
+ * light_subpaths samples per pixel sample where the camera-only ones (s <= 1, t >= 2) have
+ * one, and the balance heuristic weighs each strategy by its density times its sample count
+ * (Veach 9.2.2: w_i = n_i p_i / sum_k n_k p_k). light_subpaths = 0 is path tracing;
+ * inner_connections = 0 drops the s >= 2, t >= 2 connections (path tracing plus light
+ * tracing). The light-subpath strategies' contributions are divided by light_subpaths
+ * (they are made with that probability). */
 #ifndef CLBDPT_STRATEGIES_H
 #define CLBDPT_STRATEGIES_H
 
@@ -20,8 +30,34 @@
 #define INTEGRATOR INTEGRATOR_BDPT
 #endif
 
+typedef struct {
+    float light_subpaths;  /* light subpaths per pixel sample, 0 .. 1 */
+    int inner_connections; /* whether s >= 2, t >= 2 strategies are used */
+} StrategyMix;
+
+/* Every strategy, one light subpath per camera subpath: plain BDPT. */
+inline StrategyMix full_strategy_mix(void) {
+    StrategyMix mix;
+    mix.light_subpaths = 1.0f;
+    mix.inner_connections = 1;
+    return mix;
+}
+
+/* Whether strategy (s, t) joins a vertex of the light subpath (rather than only the camera
+ * subpath and, for s = 1, a freshly sampled light point). */
+inline int strategy_uses_light_subpath(int s, int t) { return s >= 2 || t == 1; }
+
+/* Samples of strategy (s, t) per pixel sample. */
+inline float strategy_sample_count(const StrategyMix* mix, int s, int t) {
+#if INTEGRATOR == INTEGRATOR_BDPT
+    return strategy_uses_light_subpath(s, t) ? mix->light_subpaths : 1.0f;
+#else
+    return 1.0f; /* pt and lt each use one kind of strategy only: counts cancel */
+#endif
+}
+
 /* light_is_area: whether the path's emitter is an area light (only then is (1,1) possible). */
-inline int strategy_enabled(int s, int t, int light_is_area) {
+inline int strategy_enabled(const StrategyMix* mix, int s, int t, int light_is_area) {
     if (t < 1 || s + t < 2) return 0;
     if (s == 1 && t == 1 && !light_is_area) return 0;
 #if INTEGRATOR == INTEGRATOR_PT
@@ -29,7 +65,8 @@ inline int strategy_enabled(int s, int t, int light_is_area) {
 #elif INTEGRATOR == INTEGRATOR_LT
     return t == 1;
 #else
-    return 1;
+    if (s >= 2 && t >= 2 && !mix->inner_connections) return 0;
+    return !strategy_uses_light_subpath(s, t) || mix->light_subpaths > 0.0f;
 #endif
 }
 

@@ -7,6 +7,7 @@
 #define CLBDPT_WALK_H
 
 #include "rng.h"
+#include "sample_dimensions.h"
 #include "vertex.h"
 #ifdef HAS_BUMP_MAPS
 #include "bump.h"
@@ -49,7 +50,7 @@ inline void surface_vertex_from_hit(const SceneData* scene, const PathVertex* pr
 
 /* Extends a subpath: path[-1] is the vertex the ray (o, d) leaves, with throughput beta and
  * solid-angle density pdf_dir of d. Writes at most max_vertices vertices from path[0] on and
- * returns how many.
+ * returns how many. Bounce k draws from first_draw + SAMPLE_DRAWS_PER_BOUNCE * k.
  *
  * Densities between surface vertices are evaluated from the vertex positions, exactly as every
  * MIS evaluation later does, not from the sampled direction: the ray leaves from an offset
@@ -57,7 +58,7 @@ inline void surface_vertex_from_hit(const SceneData* scene, const PathVertex* pr
  * and a near-specular glossy lobe's density changes by percents over that. With positions on
  * both sides the MIS weights of a path sum to 1 to float precision (tests/mis_test.cpp). */
 inline int random_walk(const SceneData* scene, Rng* rng, float3 o, float3 d, float3 beta, float pdf_dir,
-                       int max_vertices, int mode, PathVertex* path) {
+                       int max_vertices, int mode, uint first_draw, PathVertex* path) {
     if (max_vertices == 0) return 0;
     int bounces = 0;
     float pdf_fwd = pdf_dir;
@@ -99,6 +100,7 @@ inline int random_walk(const SceneData* scene, Rng* rng, float3 o, float3 d, flo
         ++bounces;
         if (vertex->type == VERTEX_LIGHT || bounces >= max_vertices) break;
 
+        rng_seek(rng, first_draw + SAMPLE_DRAWS_PER_BOUNCE * (uint)(bounces - 1));
         float u_lobe = rng_next(rng);
         float2 u_dir = rng_next2(rng);
         float3 u = (float3)(u_lobe, u_dir.x, u_dir.y);
@@ -124,6 +126,7 @@ inline int random_walk(const SceneData* scene, Rng* rng, float3 o, float3 d, flo
  * max_depth scattering vertices and the emitter); max_depth = -1 gives the camera vertex alone. */
 inline int generate_camera_subpath(const SceneData* scene, Rng* rng, float2 raster, int max_depth, PathVertex* path) {
     float3 o, d;
+    rng_seek(rng, SAMPLE_DRAW_LENS);
     float2 u_lens = rng_next2(rng);
     camera_generate_ray(&scene->camera, raster, u_lens, &o, &d);
     float pdf_pos, pdf_dir;
@@ -141,13 +144,18 @@ inline int generate_camera_subpath(const SceneData* scene, Rng* rng, float2 rast
     cam->material = -1;
     cam->light = -1;
     if (pdf_dir == 0.0f) return 1;
-    return random_walk(scene, rng, o, d, cam->beta, pdf_dir, max_depth + 1, TRANSPORT_RADIANCE, path + 1) + 1;
+    return random_walk(scene, rng, o, d, cam->beta, pdf_dir, max_depth + 1, TRANSPORT_RADIANCE,
+                       sample_draw_camera_bounce(0), path + 1) + 1;
 }
 
 /* Light subpath: at most max_depth + 1 vertices (the light and max_depth scattering vertices). */
 inline int generate_light_subpath(const SceneData* scene, Rng* rng, int max_depth, PathVertex* path) {
+    rng_seek(rng, SAMPLE_DRAW_LIGHT_CHOICE);
     float u_light = rng_next(rng);
-    float2 u_pos = rng_next2(rng), u_dir = rng_next2(rng);
+    rng_seek(rng, SAMPLE_DRAW_LIGHT_POSITION);
+    float2 u_pos = rng_next2(rng);
+    rng_seek(rng, SAMPLE_DRAW_LIGHT_DIRECTION);
+    float2 u_dir = rng_next2(rng);
     if (scene->info.light_count == 0) return 0;
     float select_pdf;
     int light = sample_light_index(scene, u_light, &select_pdf);
@@ -174,7 +182,8 @@ inline int generate_light_subpath(const SceneData* scene, Rng* rng, int max_dept
 #endif
     float3 beta = er.le * (fabs(dot(er.n, er.dir)) / (select_pdf * er.pdf_pos * er.pdf_dir));
     float3 o = kind == LIGHT_AREA ? offset_ray_origin(er.origin, er.n, er.dir) : er.origin;
-    int n = random_walk(scene, rng, o, er.dir, beta, er.pdf_dir, max_depth, TRANSPORT_IMPORTANCE, path + 1);
+    int n = random_walk(scene, rng, o, er.dir, beta, er.pdf_dir, max_depth, TRANSPORT_IMPORTANCE,
+                        sample_draw_light_bounce(0), path + 1);
     if (light_is_infinite(kind)) {
         /* Infinite lights: the first hit's density is that of the bounding disk, and the light
          * vertex's own density is the direction's (seed ch. 6). */

@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -224,6 +225,59 @@ TEST_F(CliTest, TwoDevicesShareOneRender) {
     for (size_t i = 0; i < a.size(); ++i) EXPECT_NEAR(a[i], b[i], 1e-6f * (1.0f + a[i])) << i;
 }
 
+// The default integrator (auto) runs the efficiency pilot when the render is long enough for it
+// to pay off, reports what it measured and renders with the candidate it predicts best; short
+// renders use plain bdpt; --light-subpaths / --connections fix the mix by hand.
+TEST_F(CliTest, AutoChoosesTheStrategyMixByPilot) {
+    const std::string scene = " " + std::string(CLBDPT_SCENES_DIR) + "/lamp-ceiling/lamp-ceiling.json --width 32 --height 32";
+    CommandResult r = run("render" + scene + " --spp 160 -o " + out("auto.exr") + " --stats " + out("auto.json"));
+    ASSERT_EQ(r.status, 0) << r.output;
+    std::ifstream in(out("auto.json"));
+    nlohmann::json j = nlohmann::json::parse(in);
+    ASSERT_TRUE(j.contains("strategy_pilot")) << j.dump(2);
+    const nlohmann::json& p = j["strategy_pilot"];
+    ASSERT_EQ(p["candidates"].size(), 5u);
+    std::string best;
+    double best_efficiency = -1;
+    for (const nlohmann::json& c : p["candidates"]) {
+        EXPECT_GT(c["efficiency"].get<double>(), 0.0) << c.dump();
+        EXPECT_GT(c["seconds_per_pass"].get<double>(), 0.0) << c.dump();
+        if (c["efficiency"].get<double>() > best_efficiency) {
+            best_efficiency = c["efficiency"].get<double>();
+            best = c["name"].get<std::string>();
+        }
+    }
+    EXPECT_EQ(p["chosen"], best);
+    EXPECT_EQ(j["strategy_mix"], best);
+    EXPECT_EQ(j["spp"], 160);
+    EXPECT_NE(r.output.find(best), std::string::npos) << "the summary names the mix: " << r.output;
+    // The lamp lights the room through the ceiling: a path tracer finds its light far less often.
+    EXPECT_NE(best, "pt");
+    int w = 0, h = 0;
+    for (float v : clbdpt::read_image_rgb(out("auto.exr"), &w, &h)) ASSERT_TRUE(std::isfinite(v));
+
+    CommandResult few = run("render" + scene + " --spp 4 -o " + out("few.exr") + " --stats " + out("few.json"));
+    ASSERT_EQ(few.status, 0) << few.output;
+    std::ifstream in_few(out("few.json"));
+    nlohmann::json jf = nlohmann::json::parse(in_few);
+    EXPECT_FALSE(jf.contains("strategy_pilot"));
+    EXPECT_EQ(jf["strategy_mix"], "bdpt, 1 light subpath per sample");
+
+    CommandResult fixed = run("render" + scene + " --spp 160 --light-subpaths 0.25 --connections off -o " +
+                              out("fixed.exr") + " --stats " + out("fixed.json"));
+    ASSERT_EQ(fixed.status, 0) << fixed.output;
+    std::ifstream in_fixed(out("fixed.json"));
+    nlohmann::json jx = nlohmann::json::parse(in_fixed);
+    EXPECT_FALSE(jx.contains("strategy_pilot"));
+    EXPECT_EQ(jx["strategy_mix"], "bdpt, 0.25 light subpaths per sample, no inner connections");
+    EXPECT_EQ(jx["light_subpaths"], 0.25);
+
+    CommandResult wrong = run("render" + scene + " --spp 1 --integrator pt --light-subpaths 0.5 -o " + out("w.exr"));
+    EXPECT_NE(wrong.status, 0);
+    EXPECT_NE(wrong.output.find("apply to bdpt"), std::string::npos) << wrong.output;
+    EXPECT_FALSE(fs::exists(out("w.exr")));
+}
+
 TEST_F(CliTest, DevicesListsAtLeastOne) {
     CommandResult r = run("devices");
     ASSERT_EQ(r.status, 0) << r.output;
@@ -235,7 +289,7 @@ TEST_F(CliTest, HelpDocumentsTheOptions) {
     CommandResult r = run("render --help");
     EXPECT_EQ(r.status, 0);
     for (const char* opt : {"--output", "--spp", "--time", "--max-depth", "--seed", "--device", "--width", "--height",
-                            "--stats", "--integrator", "--aov"})
+                            "--stats", "--integrator", "--aov", "--light-subpaths", "--connections", "--sampler"})
         EXPECT_NE(r.output.find(opt), std::string::npos) << opt;
 }
 

@@ -290,16 +290,31 @@ Densities densities(const Reference& ref, const Path& path) {
     return d;
 }
 
+// The strategy mix of efficiency-aware BDPT (cl/strategies.h), restated.
+struct Mix {
+    double light_subpaths = 1;  // light subpaths per pixel sample
+    bool inner_connections = true;
+};
+
+bool uses_light_subpath(int s, int t) { return s >= 2 || t == 1; }
+
 // strategy_enabled's rules, restated: t >= 1, s + t >= 2; (1,1) only for area lights; pt uses
-// s <= 1 < t, lt uses t = 1.
-bool enabled(Integrator integrator, int s, int t, bool area) {
+// s <= 1 < t, lt uses t = 1; bdpt what the mix allows.
+bool enabled(Integrator integrator, const Mix& mix, int s, int t, bool area) {
     if (t < 1 || s + t < 2) return false;
     if (s == 1 && t == 1 && !area) return false;
     switch (integrator) {
     case Integrator::Pt: return s <= 1 && t >= 2;
     case Integrator::Lt: return t == 1;
-    default: return true;
+    default:
+        if (s >= 2 && t >= 2 && !mix.inner_connections) return false;
+        return !uses_light_subpath(s, t) || mix.light_subpaths > 0;
     }
+}
+
+// Samples of strategy (s, t) per pixel sample: the balance heuristic weighs n_s p_s.
+double sample_count(Integrator integrator, const Mix& mix, int s, int t) {
+    return integrator == Integrator::Bdpt && uses_light_subpath(s, t) ? mix.light_subpaths : 1.0;
 }
 
 // Whether strategy (s, t) can produce the path: s = 0 needs an emitter a camera ray can hit
@@ -560,7 +575,7 @@ constexpr double kWeightTolerance = 1e-3;
 // The weights of every strategy that can produce a path sum to 1 (float rounding).
 constexpr double kSumTolerance = 1e-4;
 
-void check_integrator(Integrator integrator, bool thin, uint64_t seed) {
+void check_integrator(Integrator integrator, bool thin, uint64_t seed, Mix mix = Mix()) {
     const TestScene& ts = scene();
     Camera cam = make_camera(camera_desc(thin), kWidth, kHeight);
     Reference ref(ts.ds, cam);
@@ -589,11 +604,12 @@ void check_integrator(Integrator integrator, bool thin, uint64_t seed) {
         std::vector<double> p(n + 1, 0.0);
         for (int s = 0; s <= n; ++s) {
             int t = n - s;
-            if (!enabled(integrator, s, t, area) || !can_produce(ts.ds, path, s, t)) continue;
+            if (!enabled(integrator, mix, s, t, area) || !can_produce(ts.ds, path, s, t)) continue;
             double ps = 1;
             for (int i = 1; i < t; ++i) ps *= d.cam[i];
             for (int j = t; j < n; ++j) ps *= d.light[j];
             ASSERT_TRUE(ps > 0 && std::isfinite(ps)) << "degenerate density for s " << s;
+            ps *= sample_count(integrator, mix, s, t);
             p[s] = ps;
             sum += ps;
             producers.push_back(s);
@@ -628,6 +644,8 @@ void check_integrator(Integrator integrator, bool thin, uint64_t seed) {
     k.setArg(SceneBuffers::kSceneArgCount, vb);
     k.setArg(SceneBuffers::kSceneArgCount + 1, cb);
     k.setArg(SceneBuffers::kSceneArgCount + 2, out);
+    k.setArg(SceneBuffers::kSceneArgCount + 3, float(mix.light_subpaths));
+    k.setArg(SceneBuffers::kSceneArgCount + 4, cl_int(mix.inner_connections ? 1 : 0));
     launch(k, cases.size());
     std::vector<float> w = download<float>(out, cases.size());
 
@@ -660,6 +678,11 @@ TEST(MisBruteForce, PtPinhole) { check_integrator(Integrator::Pt, false, 103); }
 TEST(MisBruteForce, PtThinLens) { check_integrator(Integrator::Pt, true, 104); }
 TEST(MisBruteForce, LtPinhole) { check_integrator(Integrator::Lt, false, 105); }
 TEST(MisBruteForce, LtThinLens) { check_integrator(Integrator::Lt, true, 106); }
+// Efficiency-aware mixes: a quarter of a light subpath per pixel sample; half, without the
+// s >= 2, t >= 2 connections; none (path tracing inside the bdpt kernel).
+TEST(MisBruteForce, BdptQuarterLightSubpaths) { check_integrator(Integrator::Bdpt, false, 107, Mix{0.25, true}); }
+TEST(MisBruteForce, BdptNoInnerConnections) { check_integrator(Integrator::Bdpt, true, 108, Mix{0.5, false}); }
+TEST(MisBruteForce, BdptNoLightSubpaths) { check_integrator(Integrator::Bdpt, false, 109, Mix{0.0, true}); }
 
 }  // namespace
 }  // namespace clbdpt::test

@@ -16,7 +16,8 @@ struct MisSums {
     long paths = 0;    // paths checked
 };
 
-MisSums mis_sums(const Scene& scene, Integrator integrator, int max_depth, int size, int passes) {
+MisSums mis_sums(const Scene& scene, Integrator integrator, int max_depth, int size, int passes,
+                 float light_subpaths = 1.0f, bool inner_connections = true) {
     DeviceScene ds = build_device_scene(scene, size, size);
     DeviceContext& device = test_device();
     const ProgramBuild& build = device.program("kernels/mis_test.cl", kernel_defines(ds, integrator, max_depth));
@@ -34,6 +35,8 @@ MisSums mis_sums(const Scene& scene, Integrator integrator, int max_depth, int s
         params.pixel_count = pixels;
         params.sample_index = uint32_t(pass);
         params.max_depth = max_depth;
+        params.light_subpaths = light_subpaths;
+        params.inner_connections = inner_connections ? 1 : 0;
         kernel.setArg(SceneBuffers::kSceneArgCount, params);
         kernel.setArg(SceneBuffers::kSceneArgCount + 1, out);
         device.queue().enqueueNDRangeKernel(kernel, cl::NullRange, cl::NDRange(size_t(pixels)), cl::NullRange);
@@ -78,6 +81,17 @@ TEST(MisWeights, SumToOneCornellSpecular) { check_scene("cornell-specular", 8); 
 TEST(MisWeights, SumToOneVeachMis) { check_scene("veach-mis", 5); }
 TEST(MisWeights, SumToOneSky) { check_scene("sky", 5); }
 TEST(MisWeights, SumToOneLampCeiling) { check_scene("lamp-ceiling", 6, 20); }
+
+// Efficiency-aware mixes (cl/strategies.h): the count-weighted balance heuristic still sums to 1
+// over the strategies the mix enables.
+TEST(MisWeights, SumToOneUnderStrategyMixes) {
+    Scene scene = load_scene(scene_path("cornell-specular"));
+    for (auto [light_subpaths, connections] : {std::pair{0.25f, true}, std::pair{0.5f, false}, std::pair{0.0f, true}}) {
+        MisSums sums = mis_sums(scene, Integrator::Bdpt, 8, 64, 4, light_subpaths, connections);
+        EXPECT_GE(sums.paths, 100) << light_subpaths << " " << connections;
+        EXPECT_LT(sums.worst, kTolerance) << light_subpaths << " " << connections << ": " << sums.paths << " paths";
+    }
+}
 
 }  // namespace
 }  // namespace clbdpt::test

@@ -14,13 +14,14 @@
 
 #include <filesystem>
 
+#include "render/strategy_pilot.h"
 #include "test_scenes.h"
 
 namespace clbdpt::test {
 namespace {
 
-// Tolerance: 16 regions + the image mean, up to 3 pairs, 5 scenes: about 250 comparisons. At
-// 4.5 standard errors a correct renderer fails one with probability ~250 * 6.8e-6 = 2e-3 under
+// Tolerance: 16 regions + the image mean, up to 5 pairs, 5 scenes: about 420 comparisons. At
+// 4.5 standard errors a correct renderer fails one with probability ~420 * 6.8e-6 = 3e-3 under
 // a normal model; the seeds are fixed, so a pass stays a pass. The standard errors come from
 // the spread of independent one-sample-per-pixel passes over 12x12-pixel regions, so each
 // per-pass region value is itself a mean of 144 samples and close to normal.
@@ -51,6 +52,17 @@ TEST_P(SceneAgreementTest, IntegratorsAgree) {
     RegionStats pt = render_stats_or_fail(scene, make_options(Integrator::Pt, kMaxDepth, 202), passes, kBlocks, "pt");
     ASSERT_GT(bdpt.image_mean, 0.0) << c.scene << " renders black";
     expect_agree(bdpt, pt, kSigmas, "bdpt vs pt");
+    // Efficiency-aware mixes (cl/strategies.h): fewer light subpaths, counted in the MIS, and
+    // no inner connections are unbiased too.
+    const std::pair<float, bool> mixes[] = {{0.25f, true}, {0.5f, false}};
+    for (size_t m = 0; m < 2; ++m) {
+        RenderOptions o = make_options(Integrator::Bdpt, kMaxDepth, 404 + uint32_t(m));
+        o.light_subpaths = mixes[m].first;
+        o.inner_connections = mixes[m].second;
+        const std::string name = describe_strategy_mix(Integrator::Bdpt, o.light_subpaths, o.inner_connections);
+        RegionStats mixed = render_stats_or_fail(scene, o, passes, kBlocks, name);
+        expect_agree(mixed, pt, kSigmas, name + " vs pt");
+    }
     if (c.lt) {
         RegionStats lt = render_stats_or_fail(scene, make_options(Integrator::Lt, kMaxDepth, 303), passes, kBlocks, "lt");
         expect_agree(bdpt, lt, kSigmas, "bdpt vs lt");

@@ -32,7 +32,9 @@
         F(SceneInfo, pad1)                                                                        \
     S(RenderParams) F(RenderParams, width) F(RenderParams, height) F(RenderParams, first_pixel)   \
         F(RenderParams, pixel_count) F(RenderParams, sample_index) F(RenderParams, seed)          \
-        F(RenderParams, max_depth) F(RenderParams, pad0)                                          \
+        F(RenderParams, max_depth) F(RenderParams, light_subpaths)                                \
+        F(RenderParams, inner_connections) F(RenderParams, pixel_stride)                          \
+        F(RenderParams, position_sample_index) F(RenderParams, position_seed)                     \
     S(SplatRecord) F(SplatRecord, r) F(SplatRecord, g) F(SplatRecord, b) F(SplatRecord, pixel)
 
 #ifdef CLBDPT_DEVICE

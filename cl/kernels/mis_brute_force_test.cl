@@ -44,16 +44,19 @@ inline PathVertex path_vertex(__global const TestVertex* v) {
     return r;
 }
 
-/* out[i] = mis_weight of case i, with the freshly sampled connection vertex built exactly as
+/* out[i] = mis_weight of case i under the strategy mix (light_subpaths, inner_connections), with the freshly sampled connection vertex built exactly as
  * connect_bdpt builds it: for t = 1 the lens point (normal = the viewing direction, densities
  * 0), for s = 1 (t > 1) the light point with pdf_fwd = vertex_pdf_light_origin toward the
  * camera subpath's end. */
 __kernel void mis_weight_test(SCENE_KERNEL_ARGS, __global const TestVertex* vertices, __global const MisCase* cases,
-                              __global float* out) {
+                              __global float* out, float light_subpaths, int inner_connections) {
     int gid = get_global_id(0);
     uint rays = 0;
     SceneData scene = SCENE_DATA_FROM_KERNEL_ARGS(&rays);
     MisCase c = cases[gid];
+    StrategyMix mix;
+    mix.light_subpaths = light_subpaths;
+    mix.inner_connections = inner_connections;
     PathVertex light_path[TEST_MAX_VERTICES], camera_path[TEST_MAX_VERTICES];
     for (int j = 0; j < c.s; ++j) light_path[j] = path_vertex(&vertices[c.light_offset + j]);
     for (int j = 0; j < c.t; ++j) camera_path[j] = path_vertex(&vertices[c.camera_offset + j]);
@@ -74,7 +77,7 @@ __kernel void mis_weight_test(SCENE_KERNEL_ARGS, __global const TestVertex* vert
         sampled.pdf_rev = 0.0f;
         sampled.pdf_fwd = vertex_pdf_light_origin(&scene, &sampled, &camera_path[c.t - 1]);
     }
-    out[gid] = mis_weight(&scene, light_path, camera_path, &sampled, c.s, c.t);
+    out[gid] = mis_weight(&scene, &mix, light_path, camera_path, &sampled, c.s, c.t);
 }
 
 #endif

@@ -18,8 +18,9 @@
 
 /* Whether strategy (s, t) can produce the path x_0 .. x_k (its connection joins x_{t-1} and
  * x_t, and both must be non-specular; s = 0 uses no connection). */
-inline int strategy_can_produce(const SceneData* scene, const PathVertex* x, int s, int t, int light_is_area) {
-    if (!strategy_enabled(s, t, light_is_area)) return 0;
+inline int strategy_can_produce(const SceneData* scene, const StrategyMix* mix, const PathVertex* x, int s, int t,
+                                int light_is_area) {
+    if (!strategy_enabled(mix, s, t, light_is_area)) return 0;
     if (s == 0) return 1;
     /* x_t is the emitter itself when s = 1; its own delta flag (a specular emitter's scattering)
      * does not matter for a light vertex. */
@@ -32,6 +33,9 @@ __kernel void mis_weight_sums(SCENE_KERNEL_ARGS, RenderParams params, __global f
     if (gid >= params.pixel_count) return;
     uint rays = 0;
     SceneData scene = SCENE_DATA_FROM_KERNEL_ARGS(&rays);
+    StrategyMix mix;
+    mix.light_subpaths = params.light_subpaths;
+    mix.inner_connections = params.inner_connections;
     int pixel = params.first_pixel + gid;
     Rng rng = rng_init((uint)pixel, params.sample_index, params.seed);
     float2 raster = (float2)((float)(pixel % params.width), (float)(pixel / params.width)) + rng_next2(&rng);
@@ -54,7 +58,7 @@ __kernel void mis_weight_sums(SCENE_KERNEL_ARGS, RenderParams params, __global f
         int producers = 0;
         for (int t = 1; t <= k + 1; ++t) {
             int s = k + 1 - t;
-            if (!strategy_can_produce(&scene, x, s, t, light_is_area)) continue;
+            if (!strategy_can_produce(&scene, &mix, x, s, t, light_is_area)) continue;
             PathVertex light_path[MAX_DEPTH + 2];
             for (int j = 0; j < s; ++j) {
                 PathVertex v = j == 0 ? light0 : x[k - j];
@@ -73,7 +77,7 @@ __kernel void mis_weight_sums(SCENE_KERNEL_ARGS, RenderParams params, __global f
             } else if (s == 1) {
                 sampled = light_path[0];
             }
-            float w = mis_weight(&scene, light_path, x, &sampled, s, t);
+            float w = mis_weight(&scene, &mix, light_path, x, &sampled, s, t);
 #ifdef MIS_TEST_DEBUG
             printf("gid %d k %d s %d t %d w %g\n", gid, k, s, t, w);
 #endif

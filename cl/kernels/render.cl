@@ -20,12 +20,6 @@
 #define STRATEGY_STRIDE (MAX_DEPTH + 3)
 #define STRATEGY_SLOTS ((MAX_DEPTH + 2) * STRATEGY_STRIDE)
 
-/* Fixed sample dimensions per decision, so the same decision of every sample of a pixel uses
- * the same dimension whatever the subpaths did (what keeps a QMC sampler stratified): the
- * camera subpath draws 2 + 2 per vertex, then each (s, t) connection 2. The light subpath has
- * its own image-wide stream (rng_init_light_subpath). */
-#define DIMS_CONNECTIONS (2 + 2 * (MAX_DEPTH + 2))
-
 __kernel void render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, __global float4* camera_out,
                           __global SplatRecord* splats
 #ifdef STRATEGY_IMAGES
@@ -37,10 +31,17 @@ __kernel void render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, __global float
     uint rays_traced = 0;
     SceneData scene = SCENE_DATA_FROM_KERNEL_ARGS(&rays_traced);
 
-    int pixel = params.first_pixel + gid;
+    int pixel = render_item_pixel(params.first_pixel + gid, params.width, params.pixel_stride);
     int px = pixel % params.width, py = pixel / params.width;
+    /* The whole sample, both subpaths and every connection, draws from the pixel's own sample
+     * vector at the draws cl/sample_dimensions.h assigns. */
     Rng rng = rng_init((uint)pixel, params.sample_index, params.seed);
-    float2 raster = (float2)((float)px, (float)py) + rng_next2(&rng);
+    Rng position_rng = rng_init((uint)pixel, params.position_sample_index, params.position_seed);
+    rng_seek(&position_rng, SAMPLE_DRAW_PIXEL);
+    float2 raster = (float2)((float)px, (float)py) + rng_next2(&position_rng);
+    StrategyMix mix;
+    mix.light_subpaths = params.light_subpaths;
+    mix.inner_connections = params.inner_connections;
 
     PathVertex camera_path[MAX_DEPTH + 2];
     PathVertex light_path[MAX_DEPTH + 1];
@@ -53,11 +54,13 @@ __kernel void render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, __global float
     int n_camera = generate_camera_subpath(&scene, &rng, raster, MAX_DEPTH, camera_path);
 #endif
 #if INTEGRATOR == INTEGRATOR_PT
-    int n_light = 1; /* s = 0 and s = 1 only; light_path is never read */
+    int n_light = 0; /* s = 0 and s = 1 only; light_path is never read */
     int light_is_area = 0;
 #else
-    Rng light_rng = rng_init_light_subpath((uint)pixel, (uint)(params.width * params.height), params.sample_index, params.seed);
-    int n_light = generate_light_subpath(&scene, &light_rng, MAX_DEPTH, light_path);
+    /* A fraction of light subpaths per pixel sample is a probability (cl/strategies.h). */
+    int n_light = 0;
+    rng_seek(&rng, SAMPLE_DRAW_TRACE_LIGHT_SUBPATH);
+    if (rng_next(&rng) < mix.light_subpaths) n_light = generate_light_subpath(&scene, &rng, MAX_DEPTH, light_path);
     int light_is_area = n_light > 0 && lights[light_path[0].light].kind == LIGHT_AREA;
 #endif
 
@@ -71,16 +74,19 @@ __kernel void render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, __global float
 
     float3 L = (float3)(0.0f);
     for (int t = 1; t <= n_camera; ++t) {
-        for (int s = 0; s <= n_light; ++s) {
+        /* s = 1 with t >= 2 samples its own light point: it needs no light subpath. */
+        for (int s = 0; s <= max(n_light, 1); ++s) {
             int depth = s + t - 2;
             if (depth < 0 || depth > MAX_DEPTH) continue;
-            if (!strategy_enabled(s, t, light_is_area)) continue;
+            if (strategy_uses_light_subpath(s, t) && s > n_light) continue;
+            if (!strategy_enabled(&mix, s, t, light_is_area)) continue;
             float2 splat_raster;
             float weight;
-            rng.dimension = DIMS_CONNECTIONS + 2 * (s * STRATEGY_STRIDE + t);
-            float3 unweighted = connect_bdpt(&scene, &rng, light_path, camera_path, s, t, &splat_raster, &weight);
+            float3 unweighted = connect_bdpt(&scene, &mix, &rng, light_path, camera_path, s, t, &splat_raster, &weight);
             if (is_black(unweighted)) continue;
-            float3 c = unweighted * weight;
+            /* Divided by the strategy's samples per pixel sample (its light subpath may be
+             * traced for only a fraction of the samples). */
+            float3 c = unweighted * (weight / strategy_sample_count(&mix, s, t));
             int target = pixel;
             if (t == 1) {
                 int sx = min((int)splat_raster.x, params.width - 1);

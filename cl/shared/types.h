@@ -172,8 +172,26 @@ typedef struct {
     clbdpt_uint sample_index; /* which sample of every pixel this launch computes */
     clbdpt_uint seed;
     clbdpt_int max_depth;    /* maximum number of scattering vertices on a path */
-    clbdpt_int pad0;
+    /* The strategy mix (cl/strategies.h, StrategyMix): light subpaths traced per pixel sample
+     * (0 .. 1; a fraction is a probability, stratified over a pixel's samples) and whether
+     * subpaths are joined by connections with s >= 2 and t >= 2. */
+    float light_subpaths;
+    clbdpt_int inner_connections;
+    /* 1: the launch's work items are pixels first_pixel ..; k > 1: items run over every k-th
+     * pixel of every k-th row (render_item_pixel), the strategy pilot's sparse passes. */
+    clbdpt_int pixel_stride;
+    /* The sample and seed whose pixel-position draw the launch uses: sample_index and seed,
+     * except in the pilot's paired passes, which share positions to tell the variance of the
+     * pixel integral from the rest. */
+    clbdpt_uint position_sample_index;
+    clbdpt_uint position_seed;
 } RenderParams;
+
+/* The pixel (y * width + x) of work item `item` in a launch with pixel_stride `stride`. */
+inline clbdpt_int render_item_pixel(clbdpt_int item, clbdpt_int width, clbdpt_int stride) {
+    clbdpt_int columns = (width + stride - 1) / stride;
+    return (item / columns) * stride * width + (item % columns) * stride;
+}
 
 /* A contribution that lands at another pixel than the work item's own (t = 1 strategies).
  * Each work item owns max_depth + 1 slots; pixel < 0 marks an empty slot. The host adds the

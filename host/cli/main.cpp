@@ -21,6 +21,7 @@
 #include "render/features.h"
 #include "render/render_loop.h"
 #include "render/renderer.h"
+#include "render/strategy_pilot.h"
 #include "scene/scene.h"
 #include "util/error.h"
 
@@ -38,8 +39,10 @@ struct RenderArgs {
     int width = 0;
     int height = 0;
     std::string stats;
-    std::string integrator = "bdpt";
-    std::string sampler = "independent";
+    std::string integrator = "auto";
+    float light_subpaths = -1;  // < 0: not given
+    std::string connections;    // "on", "off" or empty
+    std::string sampler = "sobol";
     std::string aov;
     std::string strategy_images;
     bool unweighted = false;
@@ -201,7 +204,14 @@ int run_render(const RenderArgs& args) {
     check_film_fits_in_memory(width, height, args.strategy_images.empty() ? 0 : (args.max_depth >= 0 ? args.max_depth : scene.render.max_depth));
 
     RenderOptions options;
-    options.integrator = parse_integrator(args.integrator);
+    // auto: bdpt whose strategy mix (or plain pt) a pilot render picks (render/strategy_pilot.h).
+    const bool automatic = args.integrator == "auto";
+    options.integrator = automatic ? Integrator::Bdpt : parse_integrator(args.integrator);
+    const bool mix_by_hand = args.light_subpaths >= 0 || !args.connections.empty();
+    if (mix_by_hand && options.integrator != Integrator::Bdpt)
+        throw Error("--light-subpaths and --connections apply to bdpt, not " + args.integrator);
+    if (args.light_subpaths >= 0) options.light_subpaths = args.light_subpaths;
+    if (!args.connections.empty()) options.inner_connections = args.connections == "on";
     options.sampler = parse_sampler(args.sampler);
     options.spp = args.spp >= 0 ? args.spp : scene.render.spp;
     options.time_budget = args.time_budget;
@@ -263,11 +273,47 @@ int run_render(const RenderArgs& args) {
     options.progress = [&](int done, int total, double seconds) { bar.update(done, total, seconds, pixels); };
     std::vector<std::unique_ptr<Renderer>> renderers;
     std::vector<Renderer*> renderer_list;
-    for (auto& d : devices) {
+
+    // The efficiency pilot, on the first device; its renderer for the chosen integrator goes on
+    // to render there. A time budget gets the pilot when it is at least kPilotMinBudget.
+    constexpr double kPilotMinBudget = 1.0;
+    const bool timed = options.time_budget > 0;
+    const bool pilot_fits = timed ? options.time_budget >= kPilotMinBudget
+                                  : strategy_pilot_fits(width, height, options.spp);
+    const bool run_pilot = automatic && !mix_by_hand && options.strategy_images == RenderOptions::StrategyImages::Off &&
+                           pilot_fits;
+    RenderStats pilot_stats;
+    StrategyPilot pilot;
+    std::string mix_note;
+    if (run_pilot) {
+        pilot = run_strategy_pilot(device, ds, options, timed ? 0 : options.spp, options.time_budget, &pilot_stats);
+        const StrategyCandidate& c = pilot.choice();
+        options.integrator = c.integrator;
+        options.light_subpaths = c.light_subpaths;
+        options.inner_connections = c.inner_connections;
+        // A budget the pilot spent still gets one pass (render_image always renders one).
+        if (timed) options.time_budget = std::max(1e-9, options.time_budget - pilot.seconds);
+        for (auto& r : pilot.renderers)
+            if (r->options().integrator == c.integrator) {
+                r->set_strategy_mix(c.light_subpaths, c.inner_connections);
+                renderers.push_back(std::move(r));
+            }
+        char buf[160];
+        std::snprintf(buf, sizeof buf, "chosen by a pilot of %.2f s (%.0f%% of the render's samples)", pilot.seconds,
+                      100.0 * double(pilot.samples) / (double(width) * height * std::max(options.spp, 1)));
+        mix_note = buf;
+    } else if (automatic && !mix_by_hand) {
+        mix_note = !pilot_fits ? "bdpt: too few samples for the pilot to pay off" : "bdpt: no pilot with --strategy-images";
+    }
+    for (size_t i = renderers.size(); i < devices.size(); ++i) {
+        auto& d = devices[i];
         renderers.push_back(std::make_unique<Renderer>(*d, ds, options));
-        renderer_list.push_back(renderers.back().get());
+    }
+    for (size_t i = 0; i < devices.size(); ++i) {
+        auto& d = devices[i];
+        renderer_list.push_back(renderers[i].get());
         if (args.verbose) {
-            const RenderStats& rs = renderers.back()->stats();
+            const RenderStats& rs = renderers[i]->stats();
             std::string flags;
             for (const std::string& def : rs.defines) flags += " -D" + def;
             std::fprintf(stderr, "clbdpt: kernel flags:%s\nclbdpt: kernel for %s %s in %.2f s\n", flags.c_str(),
@@ -275,13 +321,24 @@ int run_render(const RenderArgs& args) {
         }
     }
     RenderStats st;
-    const double seconds_before_passes = seconds_since(start);
+    const double seconds_before_passes = seconds_since(start) - pilot.seconds;
+    // A time budget the pilot used up leaves no passes to render (render_image would read a
+    // zero budget as "render spp passes").
     Film film = render_image(renderer_list, options, &st);
+    if (run_pilot) {
+        st.add(pilot_stats);
+        st.program_from_cache = st.program_from_cache && pilot_stats.program_from_cache;
+        st.seconds += pilot.seconds;
+        st.first_pass_seconds += pilot.seconds;
+    }
+    const std::string strategy_mix = describe_strategy_mix(options.integrator, options.light_subpaths,
+                                                           options.inner_connections);
     // Loading, BVH, kernel builds (or cache loads) and the first pass: what a user waits for.
     const double first_pass_seconds = seconds_before_passes + st.first_pass_seconds;
     bar.finish();
 
     meta.strings.push_back({"clbdpt:integrator", integrator_name(options.integrator)});
+    meta.strings.push_back({"clbdpt:strategy_mix", strategy_mix});
     meta.strings.push_back({"clbdpt:sampler", sampler_name(options.sampler)});
     meta.strings.push_back({"clbdpt:spp", std::to_string(film.spp)});
     meta.strings.push_back({"clbdpt:max_depth", std::to_string(options.max_depth)});
@@ -297,6 +354,27 @@ int run_render(const RenderArgs& args) {
         j["scene"] = args.scene;
         j["output"] = output;
         j["integrator"] = integrator_name(options.integrator);
+        j["strategy_mix"] = strategy_mix;
+        j["light_subpaths"] = options.integrator == Integrator::Bdpt ? options.light_subpaths
+                              : options.integrator == Integrator::Lt ? 1.0f : 0.0f;
+        j["inner_connections"] = options.integrator == Integrator::Bdpt && options.inner_connections;
+        if (!mix_note.empty()) j["strategy_mix_note"] = mix_note;
+        if (run_pilot) {
+            nlohmann::json p;
+            p["seconds"] = pilot.seconds;
+            p["samples"] = pilot.samples;
+            p["pixel_stride"] = pilot.pixel_stride;
+            p["chosen"] = pilot.choice().name;
+            for (const StrategyCandidate& c : pilot.candidates)
+                p["candidates"].push_back({{"name", c.name},
+                                           {"variance_transport", c.variance_transport},
+                                           {"variance_pixel", c.variance_pixel},
+                                           {"seconds_per_pass", c.seconds_per_pass},
+                                           {"predicted_spp", c.predicted_spp},
+                                           {"predicted_mse", c.predicted_mse},
+                                           {"efficiency", c.efficiency}});
+            j["strategy_pilot"] = p;
+        }
         j["sampler"] = sampler_name(options.sampler);
         j["width"] = width;
         j["height"] = height;
@@ -335,10 +413,18 @@ int run_render(const RenderArgs& args) {
                      st.samples ? 1e6 * p.kernel_seconds / double(st.samples) : 0.0,
                      st.rays ? 1e6 * p.kernel_seconds / double(st.rays) : 0.0);
     }
+    if (args.verbose && run_pilot)
+        for (const StrategyCandidate& c : pilot.candidates)
+            std::fprintf(stderr,
+                         "clbdpt: pilot: %-56s variance per sample: transport %.3g, pixel %.3g; %.3f s/pass; "
+                         "predicted MSE %.3g at %.0f spp; efficiency %.3g%s\n",
+                         c.name.c_str(), c.variance_transport, c.variance_pixel, c.seconds_per_pass, c.predicted_mse,
+                         c.predicted_spp, c.efficiency, &c == &pilot.choice() ? "  <- chosen" : "");
     std::fprintf(stderr,
                  "clbdpt: %s %d spp %dx%d in %.2f s: %.3f M samples/s, %.2f M rays/s; kernel %s %.2f s; wrote %s\n",
-                 integrator_name(options.integrator), film.spp, width, height, st.seconds, sps * 1e-6, rps * 1e-6,
+                 strategy_mix.c_str(), film.spp, width, height, st.seconds, sps * 1e-6, rps * 1e-6,
                  st.program_from_cache ? "cached" : "build", st.build_seconds, output.c_str());
+    if (!mix_note.empty()) std::fprintf(stderr, "clbdpt: strategy mix %s\n", mix_note.c_str());
     return 0;
 }
 
@@ -369,8 +455,17 @@ int main(int argc, char** argv) {
     render->add_option("--width", args.width, "Film width override")->check(CLI::Range(1, 32768));
     render->add_option("--height", args.height, "Film height override")->check(CLI::Range(1, 32768));
     render->add_option("--stats", args.stats, "Write a JSON summary (spp, seconds, samples/s, rays/s, ...)");
-    render->add_option("--integrator", args.integrator, "bdpt (all strategies), pt (s <= 1) or lt (t = 1)")
-        ->check(CLI::IsMember({"bdpt", "pt", "lt"}));
+    render->add_option("--integrator", args.integrator,
+                       "auto (default: bdpt or pt, whichever strategy mix a short pilot render finds most efficient "
+                       "for the scene), bdpt (all strategies), pt (s <= 1) or lt (t = 1)")
+        ->check(CLI::IsMember({"auto", "bdpt", "pt", "lt"}));
+    render->add_option("--light-subpaths", args.light_subpaths,
+                       "bdpt: light subpaths traced per pixel sample, 0 to 1 (a fraction is a probability; MIS "
+                       "counts it); fixes what auto would choose")
+        ->check(CLI::Range(0.0f, 1.0f));
+    render->add_option("--connections", args.connections,
+                       "bdpt: on (default) or off: whether subpaths are joined by connections with s >= 2 and t >= 2")
+        ->check(CLI::IsMember({"on", "off"}));
     render->add_option("--sampler", args.sampler,
                        "independent (uniform random numbers) or sobol (padded Owen-scrambled Sobol)")
         ->check(CLI::IsMember({"independent", "sobol"}));

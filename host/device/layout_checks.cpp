@@ -109,7 +109,7 @@ CLBDPT_CHECK_FIELD(SceneInfo, node_count, 36);
 CLBDPT_CHECK_FIELD(SceneInfo, pad0, 40);
 CLBDPT_CHECK_FIELD(SceneInfo, pad1, 44);
 
-CLBDPT_CHECK_STRUCT(RenderParams, 32, 4);
+CLBDPT_CHECK_STRUCT(RenderParams, 48, 4);
 CLBDPT_CHECK_FIELD(RenderParams, width, 0);
 CLBDPT_CHECK_FIELD(RenderParams, height, 4);
 CLBDPT_CHECK_FIELD(RenderParams, first_pixel, 8);
@@ -117,7 +117,11 @@ CLBDPT_CHECK_FIELD(RenderParams, pixel_count, 12);
 CLBDPT_CHECK_FIELD(RenderParams, sample_index, 16);
 CLBDPT_CHECK_FIELD(RenderParams, seed, 20);
 CLBDPT_CHECK_FIELD(RenderParams, max_depth, 24);
-CLBDPT_CHECK_FIELD(RenderParams, pad0, 28);
+CLBDPT_CHECK_FIELD(RenderParams, light_subpaths, 28);
+CLBDPT_CHECK_FIELD(RenderParams, inner_connections, 32);
+CLBDPT_CHECK_FIELD(RenderParams, pixel_stride, 36);
+CLBDPT_CHECK_FIELD(RenderParams, position_sample_index, 40);
+CLBDPT_CHECK_FIELD(RenderParams, position_seed, 44);
 
 CLBDPT_CHECK_STRUCT(SplatRecord, 16, 4);
 CLBDPT_CHECK_FIELD(SplatRecord, r, 0);

@@ -36,8 +36,9 @@ Film render_image(const std::vector<Renderer*>& renderers, const RenderOptions& 
         try {
             for (;;) {
                 if (stop) return;
-                if (timed && seconds_since(start) >= options.time_budget) return;
+                // A time-bound render has at least one pass, however small the budget.
                 int pass = next_pass++;
+                if (timed && pass > 0 && seconds_since(start) >= options.time_budget) return;
                 if (!timed && pass >= options.spp) return;
                 renderers[d]->render_passes(films[d], uint32_t(pass), 1);
                 if (passes_done++ == 0) first_pass_seconds = seconds_since(start);

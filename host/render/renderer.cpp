@@ -54,9 +54,12 @@ std::vector<float> Film::strategy_image(int s, int t) const {
     return out;
 }
 
-Renderer::Renderer(DeviceContext& device, const DeviceScene& scene, const RenderOptions& options)
-    : device_(device), scene_(scene), options_(options) {
+Renderer::Renderer(DeviceContext& device, const DeviceScene& scene, const RenderOptions& options,
+                   std::shared_ptr<SceneBuffers> buffers)
+    : device_(device), scene_(scene), options_(options), scene_buffers_(std::move(buffers)) {
     if (options.max_depth < 0) throw Error("--max-depth must be >= 0");
+    if (!(options.light_subpaths >= 0.0f && options.light_subpaths <= 1.0f))
+        throw Error("light subpaths per sample must lie in [0, 1]");
     local_size_ = options.local_size > 0 ? options.local_size : (device.entry().type == "CPU" ? kCpuLocalSize : 0);
     stats_.defines = kernel_defines(scene, options.integrator, options.max_depth, options.all_features, options.sampler);
     if (options.strategy_images != RenderOptions::StrategyImages::Off) {
@@ -71,7 +74,7 @@ Renderer::Renderer(DeviceContext& device, const DeviceScene& scene, const Render
     try {
         kernel_ = cl::Kernel(build.program, "render_bdpt");
         cl::Context& ctx = device.context();
-        scene_buffers_ = std::make_unique<SceneBuffers>(ctx, scene);
+        if (!scene_buffers_) scene_buffers_ = std::make_shared<SceneBuffers>(ctx, scene);
         splat_slots_ = options.max_depth + 1;
         const size_t bytes_per_item = sizeof(cl_float4) + sizeof(SplatRecord) * size_t(splat_slots_ + strategy_slots_);
         const int pixels = scene.camera.width * scene.camera.height;
@@ -109,15 +112,36 @@ Renderer::Renderer(DeviceContext& device, const DeviceScene& scene, const Render
     }
 }
 
-void Renderer::run_batch(Film& film, uint32_t sample_index, int first_pixel, int pixel_count) {
+void Renderer::reset_counters() {
+    stats_.samples = 0;
+    stats_.rays = 0;
+    stats_.profile = RenderProfile();
+    stats_.build_seconds = 0;
+}
+
+void Renderer::set_strategy_mix(float light_subpaths, bool inner_connections) {
+    if (!(light_subpaths >= 0.0f && light_subpaths <= 1.0f)) throw Error("light subpaths per sample must lie in [0, 1]");
+    options_.light_subpaths = light_subpaths;
+    options_.inner_connections = inner_connections;
+}
+
+void Renderer::run_batch(Film& film, const PassSpec& pass, int first_item, int item_count) {
+    const int pixel_count = item_count;
+    const uint32_t sample_index = pass.sample_index;
     RenderParams params{};
     params.width = scene_.camera.width;
     params.height = scene_.camera.height;
-    params.first_pixel = first_pixel;
-    params.pixel_count = pixel_count;
-    params.sample_index = sample_index;
-    params.seed = options_.seed;
+    params.first_pixel = first_item;
+    params.pixel_count = item_count;
+    params.sample_index = pass.sample_index;
+    params.seed = pass.seed;
+    params.pixel_stride = pass.pixel_stride;
+    params.position_sample_index = pass.position_sample_index;
+    params.position_seed = pass.position_seed;
     params.max_depth = options_.max_depth;
+    const bool bdpt = options_.integrator == Integrator::Bdpt;
+    params.light_subpaths = bdpt ? options_.light_subpaths : 1.0f;
+    params.inner_connections = bdpt ? (options_.inner_connections ? 1 : 0) : 1;
     cl::CommandQueue& queue = device_.queue();
     cl::Event kernel_done, camera_read, splats_read, strategies_read;
     try {
@@ -156,7 +180,7 @@ void Renderer::run_batch(Film& film, uint32_t sample_index, int first_pixel, int
     const int width = params.width;
     for (int i = 0; i < pixel_count; ++i) {
         const cl_float4& c = camera_host_[i];
-        const int pixel = first_pixel + i;
+        const int pixel = render_item_pixel(first_item + i, width, pass.pixel_stride);
         if (!std::isfinite(c.s[0]) || !std::isfinite(c.s[1]) || !std::isfinite(c.s[2]))
             throw Error("non-finite radiance at pixel (" + std::to_string(pixel % width) + ", " +
                         std::to_string(pixel / width) + ") sample " + std::to_string(sample_index) +
@@ -199,12 +223,22 @@ void Renderer::run_batch(Film& film, uint32_t sample_index, int first_pixel, int
 }
 
 void Renderer::render_passes(Film& film, uint32_t first_sample, int count) {
-    const int pixels = scene_.camera.width * scene_.camera.height;
     for (int k = 0; k < count; ++k) {
-        for (int first = 0; first < pixels; first += batch_items_)
-            run_batch(film, first_sample + uint32_t(k), first, std::min(batch_items_, pixels - first));
-        ++film.spp;
+        PassSpec pass;
+        pass.sample_index = pass.position_sample_index = first_sample + uint32_t(k);
+        pass.seed = pass.position_seed = options_.seed;
+        render_pass(film, pass);
     }
+}
+
+void Renderer::render_pass(Film& film, const PassSpec& pass) {
+    if (pass.pixel_stride < 1) throw Error("pixel stride must be at least 1");
+    const int width = scene_.camera.width, height = scene_.camera.height;
+    const int s = pass.pixel_stride;
+    const int items = ((width + s - 1) / s) * ((height + s - 1) / s);
+    for (int first = 0; first < items; first += batch_items_)
+        run_batch(film, pass, first, std::min(batch_items_, items - first));
+    ++film.spp;
 }
 
 }  // namespace clbdpt

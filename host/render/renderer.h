@@ -19,10 +19,14 @@ namespace clbdpt {
 
 struct RenderOptions {
     Integrator integrator = Integrator::Bdpt;
-    SamplerKind sampler = SamplerKind::Independent;
+    SamplerKind sampler = SamplerKind::Sobol;
     int spp = 16;
     double time_budget = 0;  // seconds; > 0: render whole passes until spent (spp is then ignored)
     int max_depth = 5;
+    // The strategy mix of the bdpt integrator (cl/strategies.h): light subpaths per pixel
+    // sample (0 .. 1) and whether s >= 2, t >= 2 connections are made. pt and lt ignore it.
+    float light_subpaths = 1.0f;
+    bool inner_connections = true;
     uint32_t seed = 0;
     bool all_features = false;  // build the unspecialised kernel
     int batch_items = 0;        // work items per launch; 0 = automatic
@@ -80,26 +84,47 @@ struct RenderStats {
     std::vector<std::string> defines;
 };
 
+// One pass: one sample of every pixel (or, with pixel_stride k > 1, of every k-th pixel of every
+// k-th row), its pixel positions drawn by sample position_sample_index of seed position_seed.
+struct PassSpec {
+    uint32_t sample_index = 0;
+    uint32_t seed = 0;
+    uint32_t position_sample_index = 0;
+    uint32_t position_seed = 0;
+    int pixel_stride = 1;
+};
+
 class Renderer {
 public:
-    Renderer(DeviceContext& device, const DeviceScene& scene, const RenderOptions& options);
+    // buffers: the scene already uploaded to this device by another renderer (shared, so a
+    // pilot's renderers and the main render hold one copy); null uploads it.
+    Renderer(DeviceContext& device, const DeviceScene& scene, const RenderOptions& options,
+             std::shared_ptr<SceneBuffers> buffers = nullptr);
+
+    // Changes the bdpt strategy mix for the passes that follow (the efficiency pilot).
+    void set_strategy_mix(float light_subpaths, bool inner_connections);
+    const std::shared_ptr<SceneBuffers>& scene_buffers() const { return scene_buffers_; }
+    const RenderOptions& options() const { return options_; }
 
     // Renders samples [first_sample, first_sample + count) of every pixel into film.
     void render_passes(Film& film, uint32_t first_sample, int count);
+    void render_pass(Film& film, const PassSpec& pass);
 
     const RenderStats& stats() const { return stats_; }
+    // Zeroes samples, rays, profile and build time (the kernel flags and cache flag stay).
+    void reset_counters();
     const DeviceContext& device() const { return device_; }
     const DeviceScene& scene() const { return scene_; }
 
 private:
-    void run_batch(Film& film, uint32_t sample_index, int first_pixel, int pixel_count);
+    void run_batch(Film& film, const PassSpec& pass, int first_item, int item_count);
 
     DeviceContext& device_;
     const DeviceScene& scene_;
     RenderOptions options_;
     RenderStats stats_;
     cl::Kernel kernel_;
-    std::unique_ptr<SceneBuffers> scene_buffers_;
+    std::shared_ptr<SceneBuffers> scene_buffers_;
     cl::Buffer camera_out_, splats_, strategy_out_;
     int batch_items_ = 0;
     int local_size_ = 0;  // 0 = the driver's choice

@@ -1,0 +1,58 @@
+/* Which draw of a pixel sample's vector each decision of a BDPT sample uses: one table, so no
+ * two decisions share a random number and the same decision of every sample of a pixel uses
+ * the same draw whatever the subpaths did before it (what keeps a stratified sampler
+ * stratified: sample i of decision d is point i of draw d's sequence).
+ *
+ * A draw is one 1D or 2D value (rng_next / rng_next2 at rng->dimension = draw). The whole
+ * sample, camera and light subpath alike, comes from the pixel's own vector (pbrt-v3 hands
+ * BDPT one per-pixel sampler for both subpaths).
+ *
+ *   draw                                   what                                   count
+ *   SAMPLE_DRAW_PIXEL                      position in the pixel (2D)             1
+ *   SAMPLE_DRAW_LENS                       camera ray's lens point (2D)           1
+ *   SAMPLE_DRAW_TRACE_LIGHT_SUBPATH        whether a light subpath is traced (1D) 1
+ *   SAMPLE_DRAW_LIGHT_CHOICE               which light emits (1D)                 1
+ *   SAMPLE_DRAW_LIGHT_POSITION             point on it (2D)                       1
+ *   SAMPLE_DRAW_LIGHT_DIRECTION            emitted direction (2D)                 1
+ *   sample_draw_camera_bounce(k)           lobe (1D), then direction (2D)         2 per bounce, MAX_DEPTH bounces
+ *   sample_draw_light_bounce(k)            lobe (1D), then direction (2D)         2 per bounce, MAX_DEPTH bounces
+ *   sample_draw_lens_connection(s)         t = 1: lens point (2D)                 1 per s = 1 .. MAX_DEPTH + 1
+ *   sample_draw_light_connection(t)        s = 1: light choice (1D), point (2D)   2 per t = 2 .. MAX_DEPTH + 1
+ *
+ * A camera subpath has at most MAX_DEPTH + 1 scattering vertices and samples a direction at
+ * all but the last; a light subpath has at most MAX_DEPTH and samples at all but the last
+ * (MAX_DEPTH - 1 bounces; one spare slot keeps the formulas alike). Plain C so a host test can
+ * include it with any MAX_DEPTH (tests/sample_dimensions_test.cpp checks the ranges are
+ * disjoint and the values they give uncorrelated). */
+#ifndef CLBDPT_SAMPLE_DIMENSIONS_H
+#define CLBDPT_SAMPLE_DIMENSIONS_H
+
+#ifndef MAX_DEPTH
+#define MAX_DEPTH 5
+#endif
+
+#define SAMPLE_DRAW_PIXEL 0u
+#define SAMPLE_DRAW_LENS 1u
+#define SAMPLE_DRAW_TRACE_LIGHT_SUBPATH 2u
+#define SAMPLE_DRAW_LIGHT_CHOICE 3u
+#define SAMPLE_DRAW_LIGHT_POSITION 4u
+#define SAMPLE_DRAW_LIGHT_DIRECTION 5u
+#define SAMPLE_DRAWS_PER_BOUNCE 2u
+#define SAMPLE_DRAW_CAMERA_BOUNCES 6u
+#define SAMPLE_DRAW_LIGHT_BOUNCES (SAMPLE_DRAW_CAMERA_BOUNCES + SAMPLE_DRAWS_PER_BOUNCE * (MAX_DEPTH))
+#define SAMPLE_DRAW_LENS_CONNECTIONS (SAMPLE_DRAW_LIGHT_BOUNCES + SAMPLE_DRAWS_PER_BOUNCE * (MAX_DEPTH))
+#define SAMPLE_DRAW_LIGHT_CONNECTIONS (SAMPLE_DRAW_LENS_CONNECTIONS + (MAX_DEPTH) + 1u)
+#define SAMPLE_DRAWS_PER_LIGHT_CONNECTION 2u
+#define SAMPLE_DRAW_COUNT (SAMPLE_DRAW_LIGHT_CONNECTIONS + SAMPLE_DRAWS_PER_LIGHT_CONNECTION * (MAX_DEPTH))
+
+/* The first of the draws of a subpath's bounce k (k = 0 at its first scattering vertex). */
+inline unsigned int sample_draw_camera_bounce(int k) { return SAMPLE_DRAW_CAMERA_BOUNCES + SAMPLE_DRAWS_PER_BOUNCE * (unsigned int)k; }
+inline unsigned int sample_draw_light_bounce(int k) { return SAMPLE_DRAW_LIGHT_BOUNCES + SAMPLE_DRAWS_PER_BOUNCE * (unsigned int)k; }
+/* t = 1: the lens point joined to light vertex s (s >= 1). */
+inline unsigned int sample_draw_lens_connection(int s) { return SAMPLE_DRAW_LENS_CONNECTIONS + (unsigned int)(s - 1); }
+/* s = 1: the light point joined to camera vertex t (t >= 2). */
+inline unsigned int sample_draw_light_connection(int t) {
+    return SAMPLE_DRAW_LIGHT_CONNECTIONS + SAMPLE_DRAWS_PER_LIGHT_CONNECTION * (unsigned int)(t - 2);
+}
+
+#endif

@@ -1,0 +1,76 @@
+// Efficiency-aware BDPT (Grittmann, Yazici, Georgiev & Slusallek 2022): a short pilot render
+// decides, per scene, how many light subpaths a pixel sample traces and which connections it
+// makes, by estimated variance times cost. The default `clbdpt render` (--integrator auto)
+// runs it; --integrator bdpt|pt|lt and --light-subpaths / --connections fix the choice by hand.
+//
+// The pilot renders a sparse grid of pixels (about kPilotItems of them) three times per
+// candidate, on the first device, and throws the passes away afterwards (they are not
+// stratified with the render's own samples, and adding them would cost more than it gives):
+//   a, b  independent samples that share their pixel positions: (a - b)^2 / 2 estimates the
+//         variance of light transport within the pixel, v_transport;
+//   a, c  fully independent samples: (a - c)^2 / 2 estimates the whole variance of one sample,
+//         of which v_pixel = whole - v_transport comes from where in the pixel it lands.
+// A stratified sampler removes the two at different rates: the pixel integral of an image with
+// edges (a visible light's outline) is a 2D discontinuous integrand, whose variance under
+// Owen-scrambled Sobol points falls as N^-3/2, while transport keeps close to N^-1. So the
+// squared error of N samples is predicted as v_transport / N + v_pixel / N^1.5, and the
+// candidate with the least error times time (N x seconds per sample) is chosen: the inverse of
+// Grittmann et al.'s efficiency. The light image (t = 1) of a sparse pass holds only the
+// sparse pixels' light subpaths; its variance is scaled to a full pass.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "render/renderer.h"
+
+namespace clbdpt {
+
+struct StrategyCandidate {
+    std::string name;
+    Integrator integrator = Integrator::Bdpt;
+    float light_subpaths = 1.0f;
+    bool inner_connections = true;
+    // Per pixel and channel, of one sample: within the pixel (transport) and from the position
+    // in the pixel.
+    double variance_transport = 0;
+    double variance_pixel = 0;
+    double seconds_per_pass = 0;    // a full pass, scaled from the sparse ones
+    double predicted_spp = 0;       // what the render will reach (given, or from a time budget)
+    double predicted_mse = 0;       // of the image at predicted_spp
+    // 1 / (predicted squared error x render seconds); 0 when the image is black.
+    double efficiency = 0;
+};
+
+// What the bdpt integrator can be asked to do, in the pilot's order.
+std::vector<StrategyCandidate> strategy_candidates();
+
+// "bdpt, 0.5 light subpaths per sample, no inner connections", "pt", ...
+std::string describe_strategy_mix(Integrator integrator, float light_subpaths, bool inner_connections);
+
+struct StrategyPilot {
+    std::vector<StrategyCandidate> candidates;
+    int chosen = 0;       // index into candidates
+    int spp = 0;          // the render's samples per pixel the errors are predicted for (0: timed)
+    int pixel_stride = 1;  // the sparse grid: every pixel_stride-th pixel of every pixel_stride-th row
+    uint64_t samples = 0;  // pilot samples, all candidates
+    double seconds = 0;    // wall time of the pilot, kernel builds included
+    // Kept so the main render reuses their kernels and uploaded scene (one per integrator).
+    std::vector<std::unique_ptr<Renderer>> renderers;
+    const StrategyCandidate& choice() const { return candidates[size_t(chosen)]; }
+};
+
+// Samples the pilot traces for a film of `pixels` pixels, and whether it is worth running for a
+// render of `spp` samples per pixel (it may cost at most a tenth of the render's samples).
+uint64_t strategy_pilot_samples(int width, int height);
+bool strategy_pilot_fits(int width, int height, int spp);
+
+// Renders the pilot of every candidate on `device` (stats gain its samples, rays and build
+// time) and picks the candidate with the least predicted error x time at `spp` samples, or,
+// with time_budget > 0, the least predicted error after that many seconds.
+StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene, const RenderOptions& options,
+                                 int spp, double time_budget, RenderStats* stats);
+
+}  // namespace clbdpt
