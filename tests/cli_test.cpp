@@ -236,7 +236,7 @@ TEST_F(CliTest, AutoChoosesTheStrategyMixByPilot) {
     nlohmann::json j = nlohmann::json::parse(in);
     ASSERT_TRUE(j.contains("strategy_pilot")) << j.dump(2);
     const nlohmann::json& p = j["strategy_pilot"];
-    ASSERT_EQ(p["candidates"].size(), 5u);
+    ASSERT_EQ(p["candidates"].size(), 4u);
     std::string best;
     double best_efficiency = -1;
     for (const nlohmann::json& c : p["candidates"]) {
