@@ -3,7 +3,7 @@
  * work is split across work-groups, launches or devices, and any sample can be recomputed on
  * its own (STYLE.md, "Tests that prove something").
  *
- * Two samplers (the kernel is built with one):
+ * Three samplers (the kernel is built with one):
  *   independent            a hash of (seed, pixel, sample, dimension): uniform random numbers;
  *   SAMPLER_SOBOL (default) padded Owen-scrambled Sobol (Burley 2020, "Practical Hash-based Owen
  *                          Scrambling"; pbrt-v4 PaddedSobolSampler): every 1D or 2D draw gets its
@@ -11,7 +11,8 @@
  *                          with the sample index shuffled and the values Owen-scrambled by
  *                          hashes of (pixel, draw), so each 2D decision of a path (pixel
  *                          position, lens, BSDF direction, light point) is stratified across
- *                          a pixel's samples and draws are decorrelated from each other. */
+ *                          a pixel's samples and draws are decorrelated from each other;
+ *   SAMPLER_ZSOBOL         the same points ordered over the image as blue noise (below). */
 #ifndef CLBDPT_RNG_H
 #define CLBDPT_RNG_H
 
@@ -29,6 +30,11 @@ typedef struct {
     uint key;          /* hash of (seed, pixel); the sample index is mixed in per draw */
     uint sample_index;
     uint dimension;    /* the next draw (cl/sample_dimensions.h) */
+#ifdef SAMPLER_ZSOBOL
+    ulong morton_index; /* (Morton code of the pixel << log2_spp) | sample index */
+    int log2_spp;
+    int base4_digits;
+#endif
 } Rng;
 
 inline Rng rng_init(uint pixel, uint sample_index, uint seed) {
@@ -45,7 +51,7 @@ inline void rng_seek(Rng* rng, uint draw) { rng->dimension = draw; }
 /* 32 random bits -> [0, 1): the top 24 bits, so 1.0f can never come out. */
 inline float bits_to_unit_float(uint bits) { return (float)(bits >> 8) * (1.0f / 16777216.0f); }
 
-#ifdef SAMPLER_SOBOL
+#if defined(SAMPLER_SOBOL) || defined(SAMPLER_ZSOBOL)
 
 inline uint reverse_bits(uint x) {
     x = ((x >> 1) & 0x55555555u) | ((x & 0x55555555u) << 1);
@@ -90,6 +96,10 @@ inline uint sobol_dimension1_reversed(uint index) {
     return x;
 }
 
+#endif
+
+#ifdef SAMPLER_SOBOL
+
 /* The per-draw seed and the shuffled index: shuffling the index with a nested uniform scramble
  * keeps every power-of-two prefix of a pixel's samples a (0,2)-net, whatever spp is rendered. */
 inline uint sobol_draw_seed(const Rng* rng, uint draw) { return hash_u32(rng->key ^ hash_u32(draw + 0x632be5abu)); }
@@ -105,6 +115,93 @@ inline float2 rng_next2(Rng* rng) {
     uint index = owen_scramble(rng->sample_index, seed);
     uint x = reverse_bits(owen_hash(index, hash_u32(seed ^ 0xa511e9b3u)));
     uint y = reverse_bits(owen_hash(sobol_dimension1_reversed(index), hash_u32(seed ^ 0x63d83595u)));
+    return (float2)(bits_to_unit_float(x), bits_to_unit_float(y));
+}
+
+#elif defined(SAMPLER_ZSOBOL)
+
+/* pbrt-v4's MixBits: a 64-bit finaliser. */
+inline ulong mix_bits64(ulong v) {
+    v ^= v >> 31;
+    v *= 0x7fb5d329728ea185ul;
+    v ^= v >> 27;
+    v *= 0x81dadef4bc2dd44dul;
+    v ^= v >> 33;
+    return v;
+}
+
+/* The 24 permutations of a base-4 digit. */
+__constant uchar ZSOBOL_PERMUTATIONS[24][4] = {
+    {0, 1, 2, 3}, {0, 1, 3, 2}, {0, 2, 1, 3}, {0, 2, 3, 1}, {0, 3, 2, 1}, {0, 3, 1, 2}, {1, 0, 2, 3}, {1, 0, 3, 2},
+    {1, 2, 0, 3}, {1, 2, 3, 0}, {1, 3, 2, 0}, {1, 3, 0, 2}, {2, 1, 0, 3}, {2, 1, 3, 0}, {2, 0, 1, 3}, {2, 0, 3, 1},
+    {2, 3, 0, 1}, {2, 3, 1, 0}, {3, 1, 2, 0}, {3, 1, 0, 2}, {3, 2, 1, 0}, {3, 2, 0, 1}, {3, 0, 2, 1}, {3, 0, 1, 2}};
+
+inline ulong spread_bits_2d(uint x) {
+    ulong v = x;
+    v = (v | (v << 16)) & 0x0000ffff0000fffful;
+    v = (v | (v << 8)) & 0x00ff00ff00ff00fful;
+    v = (v | (v << 4)) & 0x0f0f0f0f0f0f0f0ful;
+    v = (v | (v << 2)) & 0x3333333333333333ul;
+    v = (v | (v << 1)) & 0x5555555555555555ul;
+    return v;
+}
+
+/* ZSobol (Ahmed & Wonka 2020, "Screen-space blue-noise diffusion of Monte Carlo sampling
+ * error via hierarchical ordering of pixels"; pbrt-v4 ZSobolSampler): one Sobol sequence over
+ * the whole image, pixels visited in Morton order and each pixel's samples a consecutive block
+ * of 2^log2_spp indices, with the base-4 digits of the index randomly permuted per draw
+ * (depending on the digits above them). Neighbouring pixels then get complementary parts of
+ * the sequence: the error is spread as blue noise. It needs the spp up front (rounded up to a
+ * power of two); base4_digits = log2(resolution, rounded up to a power of two) +
+ * ceil(log2_spp / 2). */
+inline Rng rng_init_zsobol(uint px, uint py, uint sample_index, uint seed, int log2_spp, int base4_digits) {
+    Rng rng;
+    rng.key = hash_u32(seed ^ 0x5bd1e995u);
+    rng.sample_index = sample_index;
+    rng.dimension = 0;
+    rng.morton_index = ((spread_bits_2d(px) | (spread_bits_2d(py) << 1)) << log2_spp) | (ulong)sample_index;
+    rng.log2_spp = log2_spp;
+    rng.base4_digits = base4_digits;
+    return rng;
+}
+
+inline ulong zsobol_index(const Rng* rng, uint draw) {
+    ulong m = rng->morton_index;
+    int odd = rng->log2_spp & 1;
+    ulong index = 0;
+    for (int i = rng->base4_digits - 1; i >= odd; --i) {
+        int shift = 2 * i - odd;
+        uint digit = (uint)(m >> shift) & 3u;
+        ulong higher = m >> (shift + 2);
+        uint p = (uint)((mix_bits64(higher ^ (0x55555555ul * (ulong)draw)) >> 24) % 24ul);
+        index |= (ulong)ZSOBOL_PERMUTATIONS[p][digit] << shift;
+    }
+    if (odd) index |= (m & 1ul) ^ (mix_bits64((m >> 1) ^ (0x55555555ul * (ulong)draw)) & 1ul);
+    return index;
+}
+
+/* The second Sobol dimension of a 64-bit index, bit-reversed: the Pascal matrix's column k has
+ * row j set iff (j & k) == j (Lucas), which for the 32 rows kept depends on k's low 5 bits only:
+ * column k + 32 is column k. */
+inline uint sobol_dimension1_reversed64(ulong index) {
+    return sobol_dimension1_reversed((uint)index) ^ sobol_dimension1_reversed((uint)(index >> 32));
+}
+
+inline uint zsobol_draw_seed(const Rng* rng, uint draw) { return hash_u32(rng->key ^ hash_u32(draw + 0x632be5abu)); }
+
+inline float rng_next(Rng* rng) {
+    uint draw = rng->dimension++;
+    ulong index = zsobol_index(rng, draw);
+    uint seed = zsobol_draw_seed(rng, draw);
+    return bits_to_unit_float(reverse_bits(owen_hash((uint)index, hash_u32(seed ^ 0xa511e9b3u))));
+}
+
+inline float2 rng_next2(Rng* rng) {
+    uint draw = rng->dimension++;
+    ulong index = zsobol_index(rng, draw);
+    uint seed = zsobol_draw_seed(rng, draw);
+    uint x = reverse_bits(owen_hash((uint)index, hash_u32(seed ^ 0xa511e9b3u)));
+    uint y = reverse_bits(owen_hash(sobol_dimension1_reversed64(index), hash_u32(seed ^ 0x63d83595u)));
     return (float2)(bits_to_unit_float(x), bits_to_unit_float(y));
 }
 

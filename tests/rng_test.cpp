@@ -62,6 +62,42 @@ TEST(Rng, DrawsAndPixelsAreDecorrelated) {
     EXPECT_NE(a[0].s[0], c[0].s[0]);
 }
 
+// ZSobol: each pixel's 2^m samples are an aligned block of one image-wide Sobol sequence, and
+// so are a 2x2 pixel quad's 4 * 2^m (Morton order): both form nets, for every draw. That is the
+// blue-noise property: neighbouring pixels' samples complement each other.
+std::vector<cl_float2> zsobol_quad(uint32_t x0, uint32_t y0, int log2_spp, uint32_t draw) {
+    DeviceContext& device = test_device();
+    const ProgramBuild& build = device.program("kernels/rng_test.cl", {"SAMPLER_ZSOBOL"});
+    cl::Kernel kernel(build.program, "zsobol_values");
+    const int n = 4 << log2_spp;
+    const int base4_digits = 6 + (log2_spp + 1) / 2;  // a 64 x 64 image
+    cl::Buffer out(device.context(), CL_MEM_WRITE_ONLY, sizeof(cl_float2) * n);
+    kernel.setArg(0, x0);
+    kernel.setArg(1, y0);
+    kernel.setArg(2, cl_int(log2_spp));
+    kernel.setArg(3, cl_int(base4_digits));
+    kernel.setArg(4, uint32_t(9));
+    kernel.setArg(5, draw);
+    kernel.setArg(6, out);
+    device.queue().enqueueNDRangeKernel(kernel, cl::NullRange, cl::NDRange(size_t(n)), cl::NullRange);
+    std::vector<cl_float2> host(n);
+    device.queue().enqueueReadBuffer(out, CL_TRUE, 0, sizeof(cl_float2) * n, host.data());
+    return host;
+}
+
+TEST(Rng, ZSobolPixelsAndPixelQuadsAreNets) {
+    for (int log2_spp : {3, 4})
+        for (uint32_t draw : {0u, 1u, 7u}) {
+            std::vector<cl_float2> v = zsobol_quad(10, 36, log2_spp, draw);
+            const int spp = 1 << log2_spp;
+            for (int q = 0; q < 4; ++q) {
+                std::vector<cl_float2> pixel(v.begin() + q * spp, v.begin() + (q + 1) * spp);
+                EXPECT_TRUE(is_net(pixel, log2_spp)) << "pixel " << q << " draw " << draw << " spp " << spp;
+            }
+            EXPECT_TRUE(is_net(v, log2_spp + 2)) << "quad, draw " << draw << " spp " << spp;
+        }
+}
+
 TEST(Rng, IndependentSamplerIsNotANet) {
     // 64 uniform random points form a (0,6,2)-net with negligible probability.
     std::vector<cl_float2> v = values({}, 0, 0, 64);

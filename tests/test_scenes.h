@@ -400,7 +400,7 @@ inline RenderOptions make_options(Integrator integrator, int max_depth, uint32_t
 
 inline std::string options_name(const RenderOptions& o) {
     std::string n = integrator_name(o.integrator);
-    if (o.sampler == SamplerKind::Sobol) n += "-sobol";
+    if (o.sampler != SamplerKind::Independent) n += std::string("-") + sampler_name(o.sampler);
     return n + "-d" + std::to_string(o.max_depth);
 }
 

@@ -35,8 +35,15 @@ __kernel void render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, __global float
     int px = pixel % params.width, py = pixel / params.width;
     /* The whole sample, both subpaths and every connection, draws from the pixel's own sample
      * vector at the draws cl/sample_dimensions.h assigns. */
+#ifdef SAMPLER_ZSOBOL
+    Rng rng = rng_init_zsobol((uint)px, (uint)py, params.sample_index, params.seed, params.zsobol_log2_spp,
+                              params.zsobol_base4_digits);
+    Rng position_rng = rng_init_zsobol((uint)px, (uint)py, params.position_sample_index, params.position_seed,
+                                       params.zsobol_log2_spp, params.zsobol_base4_digits);
+#else
     Rng rng = rng_init((uint)pixel, params.sample_index, params.seed);
     Rng position_rng = rng_init((uint)pixel, params.position_sample_index, params.position_seed);
+#endif
     rng_seek(&position_rng, SAMPLE_DRAW_PIXEL);
     float2 raster = (float2)((float)px, (float)py) + rng_next2(&position_rng);
     StrategyMix mix;

@@ -185,6 +185,11 @@ typedef struct {
      * pixel integral from the rest. */
     clbdpt_uint position_sample_index;
     clbdpt_uint position_seed;
+    /* SAMPLER_ZSOBOL only (cl/rng.h): log2 of the spp rounded up to a power of two, and the
+     * base-4 digits of the image-wide sample index. */
+    clbdpt_int zsobol_log2_spp;
+    clbdpt_int zsobol_base4_digits;
+    clbdpt_int pad0, pad1;
 } RenderParams;
 
 /* The pixel (y * width + x) of work item `item` in a launch with pixel_stride `stride`. */

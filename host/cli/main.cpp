@@ -467,8 +467,10 @@ int main(int argc, char** argv) {
                        "bdpt: on (default) or off: whether subpaths are joined by connections with s >= 2 and t >= 2")
         ->check(CLI::IsMember({"on", "off"}));
     render->add_option("--sampler", args.sampler,
-                       "independent (uniform random numbers) or sobol (padded Owen-scrambled Sobol)")
-        ->check(CLI::IsMember({"independent", "sobol"}));
+                       "sobol (default: padded Owen-scrambled Sobol, every decision stratified over a pixel's "
+                       "samples), zsobol (the same points ordered as blue noise over the image; needs --spp) or "
+                       "independent (uniform random numbers)")
+        ->check(CLI::IsMember({"independent", "sobol", "zsobol"}));
     render->add_option("--aov", args.aov, "Debug render of the first hit: normal, albedo or depth")
         ->check(CLI::IsMember({"normal", "albedo", "depth"}));
     render->add_option("--strategy-images", args.strategy_images,

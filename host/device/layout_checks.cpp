@@ -109,7 +109,7 @@ CLBDPT_CHECK_FIELD(SceneInfo, node_count, 36);
 CLBDPT_CHECK_FIELD(SceneInfo, pad0, 40);
 CLBDPT_CHECK_FIELD(SceneInfo, pad1, 44);
 
-CLBDPT_CHECK_STRUCT(RenderParams, 48, 4);
+CLBDPT_CHECK_STRUCT(RenderParams, 64, 4);
 CLBDPT_CHECK_FIELD(RenderParams, width, 0);
 CLBDPT_CHECK_FIELD(RenderParams, height, 4);
 CLBDPT_CHECK_FIELD(RenderParams, first_pixel, 8);
@@ -122,6 +122,10 @@ CLBDPT_CHECK_FIELD(RenderParams, inner_connections, 32);
 CLBDPT_CHECK_FIELD(RenderParams, pixel_stride, 36);
 CLBDPT_CHECK_FIELD(RenderParams, position_sample_index, 40);
 CLBDPT_CHECK_FIELD(RenderParams, position_seed, 44);
+CLBDPT_CHECK_FIELD(RenderParams, zsobol_log2_spp, 48);
+CLBDPT_CHECK_FIELD(RenderParams, zsobol_base4_digits, 52);
+CLBDPT_CHECK_FIELD(RenderParams, pad0, 56);
+CLBDPT_CHECK_FIELD(RenderParams, pad1, 60);
 
 CLBDPT_CHECK_STRUCT(SplatRecord, 16, 4);
 CLBDPT_CHECK_FIELD(SplatRecord, r, 0);

@@ -19,12 +19,19 @@ Integrator parse_integrator(const std::string& name) {
     throw Error("unknown integrator '" + name + "' (expected bdpt, pt or lt)");
 }
 
-const char* sampler_name(SamplerKind sampler) { return sampler == SamplerKind::Sobol ? "sobol" : "independent"; }
+const char* sampler_name(SamplerKind sampler) {
+    switch (sampler) {
+    case SamplerKind::Sobol: return "sobol";
+    case SamplerKind::ZSobol: return "zsobol";
+    default: return "independent";
+    }
+}
 
 SamplerKind parse_sampler(const std::string& name) {
     if (name == "independent") return SamplerKind::Independent;
     if (name == "sobol") return SamplerKind::Sobol;
-    throw Error("unknown sampler '" + name + "' (expected independent or sobol)");
+    if (name == "zsobol") return SamplerKind::ZSobol;
+    throw Error("unknown sampler '" + name + "' (expected sobol, zsobol or independent)");
 }
 
 std::vector<std::string> kernel_defines(const DeviceScene& scene, Integrator integrator, int max_depth,
@@ -58,6 +65,7 @@ std::vector<std::string> kernel_defines(const DeviceScene& scene, Integrator int
     d.push_back("MAX_DEPTH=" + std::to_string(max_depth));
     d.push_back("INTEGRATOR=" + std::to_string(int(integrator)));
     if (sampler == SamplerKind::Sobol) d.push_back("SAMPLER_SOBOL");
+    if (sampler == SamplerKind::ZSobol) d.push_back("SAMPLER_ZSOBOL");
     auto flag = [&](bool on, const char* name) {
         if (on || all_features) d.push_back(name);
     };

@@ -15,7 +15,7 @@ enum class Integrator { Bdpt = 0, Pt = 1, Lt = 2 };
 const char* integrator_name(Integrator integrator);
 Integrator parse_integrator(const std::string& name);  // throws Error
 
-enum class SamplerKind { Independent = 0, Sobol = 1 };
+enum class SamplerKind { Independent = 0, Sobol = 1, ZSobol = 2 };
 
 const char* sampler_name(SamplerKind sampler);
 SamplerKind parse_sampler(const std::string& name);  // throws Error

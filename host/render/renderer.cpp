@@ -60,6 +60,14 @@ Renderer::Renderer(DeviceContext& device, const DeviceScene& scene, const Render
     if (options.max_depth < 0) throw Error("--max-depth must be >= 0");
     if (!(options.light_subpaths >= 0.0f && options.light_subpaths <= 1.0f))
         throw Error("light subpaths per sample must lie in [0, 1]");
+    if (options.sampler == SamplerKind::ZSobol) {
+        // ZSobol orders a known number of samples per pixel (cl/rng.h).
+        if (options.time_budget > 0) throw Error("--sampler zsobol needs --spp: it orders a known number of samples");
+        while ((1 << zsobol_log2_spp_) < options.spp) ++zsobol_log2_spp_;
+        int log2_resolution = 0;
+        while ((1 << log2_resolution) < std::max(scene.camera.width, scene.camera.height)) ++log2_resolution;
+        zsobol_base4_digits_ = log2_resolution + (zsobol_log2_spp_ + 1) / 2;
+    }
     local_size_ = options.local_size > 0 ? options.local_size : (device.entry().type == "CPU" ? kCpuLocalSize : 0);
     stats_.defines = kernel_defines(scene, options.integrator, options.max_depth, options.all_features, options.sampler);
     if (options.strategy_images != RenderOptions::StrategyImages::Off) {
@@ -138,6 +146,8 @@ void Renderer::run_batch(Film& film, const PassSpec& pass, int first_item, int i
     params.pixel_stride = pass.pixel_stride;
     params.position_sample_index = pass.position_sample_index;
     params.position_seed = pass.position_seed;
+    params.zsobol_log2_spp = zsobol_log2_spp_;
+    params.zsobol_base4_digits = zsobol_base4_digits_;
     params.max_depth = options_.max_depth;
     const bool bdpt = options_.integrator == Integrator::Bdpt;
     params.light_subpaths = bdpt ? options_.light_subpaths : 1.0f;

@@ -128,6 +128,7 @@ private:
     cl::Buffer camera_out_, splats_, strategy_out_;
     int batch_items_ = 0;
     int local_size_ = 0;  // 0 = the driver's choice
+    int zsobol_log2_spp_ = 0, zsobol_base4_digits_ = 0;
     int splat_slots_ = 0;
     std::vector<cl_float4> camera_host_;
     std::vector<SplatRecord> splats_host_;
