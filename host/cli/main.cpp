@@ -185,6 +185,41 @@ void check_film_fits_in_memory(int width, int height, int strategy_depth) {
     }
 }
 
+// --integrator auto: runs the efficiency pilot on `device` when the render is long enough for it
+// to pay off (render/strategy_pilot.h), sets the chosen mix in `options`, and moves the pilot's
+// renderer for the chosen integrator into `renderers` (it goes on to render there). Returns how
+// the mix was chosen, for the summary.
+std::string choose_strategy_mix(DeviceContext& device, const DeviceScene& ds, RenderOptions* options,
+                                StrategyPilot* pilot, RenderStats* pilot_stats,
+                                std::vector<std::unique_ptr<Renderer>>* renderers) {
+    // A time budget gets the pilot when it is at least this many seconds.
+    constexpr double kPilotMinBudget = 1.0;
+    const int width = ds.camera.width, height = ds.camera.height;
+    const bool timed = options->time_budget > 0;
+    if (options->strategy_images != RenderOptions::StrategyImages::Off) return "bdpt: no pilot with --strategy-images";
+    if (timed ? options->time_budget < kPilotMinBudget : !strategy_pilot_fits(width, height, options->spp))
+        return "bdpt: too few samples for the pilot to pay off";
+    *pilot = run_strategy_pilot(device, ds, *options, timed ? 0 : options->spp, options->time_budget, pilot_stats);
+    const StrategyCandidate& c = pilot->choice();
+    options->integrator = c.integrator;
+    options->light_subpaths = c.light_subpaths;
+    options->inner_connections = c.inner_connections;
+    // A budget the pilot spent still gets one pass (render_image always renders one).
+    if (timed) options->time_budget = std::max(1e-9, options->time_budget - pilot->seconds);
+    for (auto& r : pilot->renderers)
+        if (r->options().integrator == c.integrator) {
+            r->set_strategy_mix(c.light_subpaths, c.inner_connections);
+            renderers->push_back(std::move(r));
+        }
+    char buf[160];
+    if (timed)
+        std::snprintf(buf, sizeof buf, "chosen by a pilot of %.2f s", pilot->seconds);
+    else
+        std::snprintf(buf, sizeof buf, "chosen by a pilot of %.2f s (%.0f%% of the render's samples)", pilot->seconds,
+                      100.0 * double(pilot->samples) / (double(width) * height * std::max(options->spp, 1)));
+    return buf;
+}
+
 int run_render(const RenderArgs& args) {
     LoadOptions load_options;
     load_options.default_light = !args.no_default_light;
@@ -274,37 +309,12 @@ int run_render(const RenderArgs& args) {
     std::vector<std::unique_ptr<Renderer>> renderers;
     std::vector<Renderer*> renderer_list;
 
-    // The efficiency pilot, on the first device; its renderer for the chosen integrator goes on
-    // to render there. A time budget gets the pilot when it is at least kPilotMinBudget.
-    constexpr double kPilotMinBudget = 1.0;
-    const bool timed = options.time_budget > 0;
-    const bool pilot_fits = timed ? options.time_budget >= kPilotMinBudget
-                                  : strategy_pilot_fits(width, height, options.spp);
-    const bool run_pilot = automatic && !mix_by_hand && options.strategy_images == RenderOptions::StrategyImages::Off &&
-                           pilot_fits;
     RenderStats pilot_stats;
     StrategyPilot pilot;
-    std::string mix_note;
-    if (run_pilot) {
-        pilot = run_strategy_pilot(device, ds, options, timed ? 0 : options.spp, options.time_budget, &pilot_stats);
-        const StrategyCandidate& c = pilot.choice();
-        options.integrator = c.integrator;
-        options.light_subpaths = c.light_subpaths;
-        options.inner_connections = c.inner_connections;
-        // A budget the pilot spent still gets one pass (render_image always renders one).
-        if (timed) options.time_budget = std::max(1e-9, options.time_budget - pilot.seconds);
-        for (auto& r : pilot.renderers)
-            if (r->options().integrator == c.integrator) {
-                r->set_strategy_mix(c.light_subpaths, c.inner_connections);
-                renderers.push_back(std::move(r));
-            }
-        char buf[160];
-        std::snprintf(buf, sizeof buf, "chosen by a pilot of %.2f s (%.0f%% of the render's samples)", pilot.seconds,
-                      100.0 * double(pilot.samples) / (double(width) * height * std::max(options.spp, 1)));
-        mix_note = buf;
-    } else if (automatic && !mix_by_hand) {
-        mix_note = !pilot_fits ? "bdpt: too few samples for the pilot to pay off" : "bdpt: no pilot with --strategy-images";
-    }
+    const std::string mix_note = automatic && !mix_by_hand
+                                     ? choose_strategy_mix(device, ds, &options, &pilot, &pilot_stats, &renderers)
+                                     : "";
+    const bool run_pilot = pilot.seconds > 0;
     for (size_t i = renderers.size(); i < devices.size(); ++i) {
         auto& d = devices[i];
         renderers.push_back(std::make_unique<Renderer>(*d, ds, options));
@@ -322,8 +332,6 @@ int run_render(const RenderArgs& args) {
     }
     RenderStats st;
     const double seconds_before_passes = seconds_since(start) - pilot.seconds;
-    // A time budget the pilot used up leaves no passes to render (render_image would read a
-    // zero budget as "render spp passes").
     Film film = render_image(renderer_list, options, &st);
     if (run_pilot) {
         st.add(pilot_stats);

@@ -88,7 +88,6 @@ bool strategy_pilot_fits(int width, int height, int spp) {
 StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene, const RenderOptions& options,
                                  int spp, double time_budget, RenderStats* stats) {
     using Clock = std::chrono::steady_clock;
-    const Clock::time_point start = Clock::now();
     StrategyPilot pilot;
     pilot.candidates = strategy_candidates();
     pilot.spp = spp;
@@ -111,6 +110,7 @@ StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene
         buffers = r->scene_buffers();
     }
 
+    const Clock::time_point start = Clock::now();
     // Passes a, b, c (see the header), each from its own seed; a and b share pixel positions.
     // Round robin, so a change of the machine's load hits every candidate alike.
     const uint32_t seed_a = options.seed ^ 0x6a09e667u, seed_b = options.seed ^ 0xbb67ae85u,

@@ -56,7 +56,7 @@ struct StrategyPilot {
     int spp = 0;          // the render's samples per pixel the errors are predicted for (0: timed)
     int pixel_stride = 1;  // the sparse grid: every pixel_stride-th pixel of every pixel_stride-th row
     uint64_t samples = 0;  // pilot samples, all candidates
-    double seconds = 0;    // wall time of the pilot, kernel builds included
+    double seconds = 0;    // wall time of the pilot's passes (kernel builds count as builds)
     // Kept so the main render reuses their kernels and uploaded scene (one per integrator).
     std::vector<std::unique_ptr<Renderer>> renderers;
     const StrategyCandidate& choice() const { return candidates[size_t(chosen)]; }
