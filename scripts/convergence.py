@@ -74,6 +74,8 @@ import time
 
 import numpy as np
 
+from scene_files import scene_hash, sha256_file
+
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 BUNDLED = ["cornell-box", "cornell-specular", "lamp-ceiling", "veach-mis", "point-spot", "sky"]
 INTEGRATORS = ["bdpt", "pt", "lt"]
@@ -94,48 +96,6 @@ def log(msg):
 # helpers: hashing, images, running the renderer
 
 
-def sha256_file(path):
-    h = hashlib.sha256()
-    with open(path, "rb") as f:
-        for block in iter(lambda: f.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
-
-
-def scene_files(scene):
-    """The scene file and the files it references (meshes, their MTL libraries, env maps)."""
-    files = [scene]
-    base = os.path.dirname(scene)
-    meshes = []
-    if scene.endswith(".json"):
-        with open(scene) as f:
-            desc = json.load(f)
-        meshes = [os.path.join(base, m) for m in desc.get("meshes", [])]
-        for light in desc.get("lights", []):
-            if isinstance(light, dict) and "map" in light:
-                files.append(os.path.join(base, light["map"]))
-    else:
-        meshes = [scene]
-    for m in meshes:
-        if m not in files:
-            files.append(m)
-        try:
-            with open(m, errors="replace") as f:
-                for line in f:
-                    if line.startswith("mtllib"):
-                        for name in line.split()[1:]:
-                            files.append(os.path.join(os.path.dirname(m), name))
-        except OSError:
-            pass
-    return files
-
-
-def scene_hash(scene):
-    h = hashlib.sha256()
-    for p in scene_files(scene):
-        h.update(os.path.relpath(p, os.path.dirname(scene)).encode() + b"\0")
-        h.update((sha256_file(p) if os.path.exists(p) else "missing").encode() + b"\0")
-    return h.hexdigest()
 
 
 def read_exr(path):
@@ -226,7 +186,7 @@ class Renderer:
 
 
 def reference_settings(args, renderer, scene):
-    return {
+    settings = {
         "scene": os.path.abspath(scene),
         "scene_sha256": scene_hash(scene),
         "integrator": args.ref_integrator,
@@ -240,6 +200,7 @@ def reference_settings(args, renderer, scene):
     }
     if args.ref_sampler != "independent":       # keeps the cache keys of older references
         settings["sampler"] = args.ref_sampler
+    return settings
 
 
 def get_reference(args, renderer, scene, name):
