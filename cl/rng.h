@@ -76,26 +76,21 @@ inline uint owen_hash(uint v, uint seed) {
 
 inline uint owen_scramble(uint v, uint seed) { return reverse_bits(owen_hash(reverse_bits(v), seed)); }
 
-/* Second Sobol dimension, bit-reversed: the generator matrix columns v_1 = 2^31,
- * v_{k+1} = v_k ^ (v_k >> 1) (the Pascal matrix mod 2) stored reversed, so the result can go
- * straight into owen_hash. (The first dimension is the bit reversal of the index, reversed: the
- * index itself.) The loop runs once per set bit of the index. */
-__constant uint SOBOL_DIMENSION1_REVERSED_COLUMNS[32] = {
-    0x00000001u, 0x00000003u, 0x00000005u, 0x0000000fu, 0x00000011u, 0x00000033u, 0x00000055u, 0x000000ffu,
-    0x00000101u, 0x00000303u, 0x00000505u, 0x00000f0fu, 0x00001111u, 0x00003333u, 0x00005555u, 0x0000ffffu,
-    0x00010001u, 0x00030003u, 0x00050005u, 0x000f000fu, 0x00110011u, 0x00330033u, 0x00550055u, 0x00ff00ffu,
-    0x01010101u, 0x03030303u, 0x05050505u, 0x0f0f0f0fu, 0x11111111u, 0x33333333u, 0x55555555u, 0xffffffffu};
-
+/* Second Sobol dimension, bit-reversed, so the result can go straight into owen_hash. (The first
+ * dimension is the bit reversal of the index, reversed: the index itself.) Its generator is the
+ * Pascal matrix mod 2: column k has row j set iff j's bits are a subset of k's (Lucas), so
+ * row j of the product is the parity of the index bits k that are supersets of j, a subset-sum
+ * (zeta) transform over 5-bit positions: five shift-and-xor steps instead of a loop over the
+ * index's set bits. */
 inline uint sobol_dimension1_reversed(uint index) {
-    uint x = 0;
-    while (index != 0) {
-        uint bit = 31u - clz(index);
-        x ^= SOBOL_DIMENSION1_REVERSED_COLUMNS[bit];
-        index ^= 1u << bit;
-    }
-    return x;
+    uint y = index;
+    y ^= (y >> 1) & 0x55555555u;
+    y ^= (y >> 2) & 0x33333333u;
+    y ^= (y >> 4) & 0x0f0f0f0fu;
+    y ^= (y >> 8) & 0x00ff00ffu;
+    y ^= (y >> 16) & 0x0000ffffu;
+    return y;
 }
-
 #endif
 
 #ifdef SAMPLER_SOBOL

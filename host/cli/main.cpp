@@ -42,7 +42,7 @@ struct RenderArgs {
     std::string integrator = "auto";
     float light_subpaths = -1;  // < 0: not given
     std::string connections;    // "on", "off" or empty
-    std::string sampler = "sobol";
+    std::string sampler;  // empty: zsobol, or sobol for a time budget (zsobol needs the spp)
     std::string aov;
     std::string strategy_images;
     bool unweighted = false;
@@ -247,7 +247,12 @@ int run_render(const RenderArgs& args) {
         throw Error("--light-subpaths and --connections apply to bdpt, not " + args.integrator);
     if (args.light_subpaths >= 0) options.light_subpaths = args.light_subpaths;
     if (!args.connections.empty()) options.inner_connections = args.connections == "on";
-    options.sampler = parse_sampler(args.sampler);
+    // ZSobol is the default (measured: it stratifies the light subpaths over the image as well
+    // as over each pixel's samples; README "clbdpt and its peers"); it orders a known number of
+    // samples, so a time budget gets padded Sobol.
+    options.sampler = !args.sampler.empty() ? parse_sampler(args.sampler)
+                      : args.time_budget > 0 ? SamplerKind::Sobol
+                                             : SamplerKind::ZSobol;
     options.spp = args.spp >= 0 ? args.spp : scene.render.spp;
     options.time_budget = args.time_budget;
     options.max_depth = args.max_depth >= 0 ? args.max_depth : scene.render.max_depth;
@@ -475,9 +480,10 @@ int main(int argc, char** argv) {
                        "bdpt: on (default) or off: whether subpaths are joined by connections with s >= 2 and t >= 2")
         ->check(CLI::IsMember({"on", "off"}));
     render->add_option("--sampler", args.sampler,
-                       "sobol (default: padded Owen-scrambled Sobol, every decision stratified over a pixel's "
-                       "samples), zsobol (the same points ordered as blue noise over the image; needs --spp) or "
-                       "independent (uniform random numbers)")
+                       "zsobol (default; with --time, sobol): Owen-scrambled Sobol points ordered over the image in "
+                       "Morton order, every decision stratified over each pixel's samples and over neighbouring "
+                       "pixels; sobol: padded Owen-scrambled Sobol, stratified per pixel, any spp; independent: "
+                       "uniform random numbers")
         ->check(CLI::IsMember({"independent", "sobol", "zsobol"}));
     render->add_option("--aov", args.aov, "Debug render of the first hit: normal, albedo or depth")
         ->check(CLI::IsMember({"normal", "albedo", "depth"}));
