@@ -115,16 +115,6 @@ inline float2 rng_next2(Rng* rng) {
 
 #elif defined(SAMPLER_ZSOBOL)
 
-/* pbrt-v4's MixBits: a 64-bit finaliser. */
-inline ulong mix_bits64(ulong v) {
-    v ^= v >> 31;
-    v *= 0x7fb5d329728ea185ul;
-    v ^= v >> 27;
-    v *= 0x81dadef4bc2dd44dul;
-    v ^= v >> 33;
-    return v;
-}
-
 /* The 24 permutations of a base-4 digit. */
 __constant uchar ZSOBOL_PERMUTATIONS[24][4] = {
     {0, 1, 2, 3}, {0, 1, 3, 2}, {0, 2, 1, 3}, {0, 2, 3, 1}, {0, 3, 2, 1}, {0, 3, 1, 2}, {1, 0, 2, 3}, {1, 0, 3, 2},
@@ -145,7 +135,8 @@ inline ulong spread_bits_2d(uint x) {
  * error via hierarchical ordering of pixels"; pbrt-v4 ZSobolSampler): one Sobol sequence over
  * the whole image, pixels visited in Morton order and each pixel's samples a consecutive block
  * of 2^log2_spp indices, with the base-4 digits of the index randomly permuted per draw
- * (depending on the digits above them). Neighbouring pixels then get complementary parts of
+ * (depending on the digits above them; the permutation is picked by a 32-bit hash of those
+ * digits and the draw, where pbrt-v4 uses a 64-bit one: a third of the sampler's cost). Neighbouring pixels then get complementary parts of
  * the sequence: the error is spread as blue noise. It needs the spp up front (rounded up to a
  * power of two); base4_digits = log2(resolution, rounded up to a power of two) +
  * ceil(log2_spp / 2). */
@@ -168,10 +159,13 @@ inline ulong zsobol_index(const Rng* rng, uint draw) {
         int shift = 2 * i - odd;
         uint digit = (uint)(m >> shift) & 3u;
         ulong higher = m >> (shift + 2);
-        uint p = (uint)((mix_bits64(higher ^ (0x55555555ul * (ulong)draw)) >> 24) % 24ul);
+        uint p = (hash_u32((uint)higher ^ (uint)(higher >> 32) * 0x9e3779b9u ^ draw * 0x55555555u) >> 8) % 24u;
         index |= (ulong)ZSOBOL_PERMUTATIONS[p][digit] << shift;
     }
-    if (odd) index |= (m & 1ul) ^ (mix_bits64((m >> 1) ^ (0x55555555ul * (ulong)draw)) & 1ul);
+    if (odd) {
+        ulong higher = m >> 1;
+        index |= (m & 1ul) ^ (ulong)(hash_u32((uint)higher ^ (uint)(higher >> 32) * 0x9e3779b9u ^ draw * 0x55555555u) & 1u);
+    }
     return index;
 }
 
