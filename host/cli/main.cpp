@@ -7,7 +7,6 @@
 #include <chrono>
 #include <filesystem>
 #include <cstdio>
-#include <functional>
 #include <fstream>
 #include <memory>
 #include <iostream>
@@ -43,7 +42,7 @@ struct RenderArgs {
     std::string integrator = "auto";
     float light_subpaths = -1;  // < 0: not given
     std::string connections;    // "on", "off" or empty
-    std::string sampler;  // empty: zsobol, or sobol for a time budget (zsobol needs the spp)
+    std::string sampler;  // empty: sobol
     std::string aov;
     std::string strategy_images;
     bool unweighted = false;
@@ -190,8 +189,7 @@ void check_film_fits_in_memory(int width, int height, int strategy_depth) {
 // to pay off (render/strategy_pilot.h), sets the chosen mix in `options`, and moves the pilot's
 // renderer for the chosen integrator into `renderers` (it goes on to render there). Returns how
 // the mix was chosen, for the summary.
-std::string choose_strategy_mix(DeviceContext& device, const DeviceScene& ds,
-                                const std::function<SamplerKind(Integrator)>& sampler_for, RenderOptions* options,
+std::string choose_strategy_mix(DeviceContext& device, const DeviceScene& ds, RenderOptions* options,
                                 StrategyPilot* pilot, RenderStats* pilot_stats,
                                 std::vector<std::unique_ptr<Renderer>>* renderers) {
     // A time budget gets the pilot when it is at least this many seconds.
@@ -201,11 +199,9 @@ std::string choose_strategy_mix(DeviceContext& device, const DeviceScene& ds,
     if (options->strategy_images != RenderOptions::StrategyImages::Off) return "bdpt: no pilot with --strategy-images";
     if (timed ? options->time_budget < kPilotMinBudget : !strategy_pilot_fits(width, height, options->spp))
         return "bdpt: too few samples for the pilot to pay off";
-    *pilot = run_strategy_pilot(device, ds, *options, sampler_for, timed ? 0 : options->spp, options->time_budget,
-                                pilot_stats);
+    *pilot = run_strategy_pilot(device, ds, *options, timed ? 0 : options->spp, options->time_budget, pilot_stats);
     const StrategyCandidate& c = pilot->choice();
     options->integrator = c.integrator;
-    options->sampler = sampler_for(c.integrator);
     options->light_subpaths = c.light_subpaths;
     options->inner_connections = c.inner_connections;
     // A budget the pilot spent still gets one pass (render_image always renders one).
@@ -251,16 +247,10 @@ int run_render(const RenderArgs& args) {
         throw Error("--light-subpaths and --connections apply to bdpt, not " + args.integrator);
     if (args.light_subpaths >= 0) options.light_subpaths = args.light_subpaths;
     if (!args.connections.empty()) options.inner_connections = args.connections == "on";
-    // The default sampler, by measurement (README "clbdpt and its peers"): ZSobol for bdpt and
-    // lt, whose light subpaths it stratifies over the image as well as over each pixel's
-    // samples; padded Sobol for pt (the same error, and ZSobol's index permutations cost it
-    // samples/s) and for time budgets (ZSobol orders a known number of samples).
-    const std::function<SamplerKind(Integrator)> sampler_for = [&](Integrator integrator) {
-        if (!args.sampler.empty()) return parse_sampler(args.sampler);
-        if (args.time_budget > 0 || integrator == Integrator::Pt) return SamplerKind::Sobol;
-        return SamplerKind::ZSobol;
-    };
-    options.sampler = sampler_for(options.integrator);
+    // Padded Sobol by default, by measurement (README "Samplers"): ZSobol lowers bdpt's error
+    // where the light image dominates (the Cornell box) but costs more per sample than it gains
+    // where light subpaths and connections carry the image (lamp-ceiling), and pt gains nothing.
+    options.sampler = args.sampler.empty() ? SamplerKind::Sobol : parse_sampler(args.sampler);
     options.spp = args.spp >= 0 ? args.spp : scene.render.spp;
     options.time_budget = args.time_budget;
     options.max_depth = args.max_depth >= 0 ? args.max_depth : scene.render.max_depth;
@@ -325,8 +315,7 @@ int run_render(const RenderArgs& args) {
     RenderStats pilot_stats;
     StrategyPilot pilot;
     const std::string mix_note = automatic && !mix_by_hand
-                                     ? choose_strategy_mix(device, ds, sampler_for, &options, &pilot, &pilot_stats,
-                                                           &renderers)
+                                     ? choose_strategy_mix(device, ds, &options, &pilot, &pilot_stats, &renderers)
                                      : "";
     const bool run_pilot = pilot.seconds > 0;
     for (size_t i = renderers.size(); i < devices.size(); ++i) {
@@ -489,10 +478,9 @@ int main(int argc, char** argv) {
                        "bdpt: on (default) or off: whether subpaths are joined by connections with s >= 2 and t >= 2")
         ->check(CLI::IsMember({"on", "off"}));
     render->add_option("--sampler", args.sampler,
-                       "zsobol (default for bdpt and lt): Owen-scrambled Sobol points ordered over the image in "
-                       "Morton order, every decision stratified over each pixel's samples and over neighbouring "
-                       "pixels; needs --spp. sobol (default for pt and with --time): padded Owen-scrambled Sobol, "
-                       "stratified per pixel. independent: uniform random numbers")
+                       "sobol (default): padded Owen-scrambled Sobol, every decision stratified over a pixel's "
+                       "samples; zsobol: the same points ordered over the image in Morton order, stratified over "
+                       "neighbouring pixels too (needs --spp); independent: uniform random numbers")
         ->check(CLI::IsMember({"independent", "sobol", "zsobol"}));
     render->add_option("--aov", args.aov, "Debug render of the first hit: normal, albedo or depth")
         ->check(CLI::IsMember({"normal", "albedo", "depth"}));

@@ -19,7 +19,7 @@ namespace clbdpt {
 
 struct RenderOptions {
     Integrator integrator = Integrator::Bdpt;
-    SamplerKind sampler = SamplerKind::Sobol;  // the CLI's default is ZSobol where the spp is known
+    SamplerKind sampler = SamplerKind::Sobol;
     int spp = 16;
     double time_budget = 0;  // seconds; > 0: render whole passes until spent (spp is then ignored)
     int max_depth = 5;

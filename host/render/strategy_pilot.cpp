@@ -86,8 +86,7 @@ bool strategy_pilot_fits(int width, int height, int spp) {
 }
 
 StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene, const RenderOptions& options,
-                                 const std::function<SamplerKind(Integrator)>& sampler_for, int spp,
-                                 double time_budget, RenderStats* stats) {
+                                 int spp, double time_budget, RenderStats* stats) {
     using Clock = std::chrono::steady_clock;
     StrategyPilot pilot;
     pilot.candidates = strategy_candidates();
@@ -106,7 +105,6 @@ StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene
         if (r) continue;
         RenderOptions o = options;
         o.integrator = c.integrator;
-        o.sampler = sampler_for(c.integrator);
         pilot.renderers.push_back(std::make_unique<Renderer>(device, scene, o, buffers));
         r = pilot.renderers.back().get();
         buffers = r->scene_buffers();

@@ -20,7 +20,6 @@
 #pragma once
 
 #include <cstdint>
-#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -71,9 +70,7 @@ bool strategy_pilot_fits(int width, int height, int spp);
 // Renders the pilot of every candidate on `device` (stats gain its samples, rays and build
 // time) and picks the candidate with the least predicted error x time at `spp` samples, or,
 // with time_budget > 0, the least predicted error after that many seconds.
-// sampler_for: the sampler each integrator renders with.
 StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene, const RenderOptions& options,
-                                 const std::function<SamplerKind(Integrator)>& sampler_for, int spp,
-                                 double time_budget, RenderStats* stats);
+                                 int spp, double time_budget, RenderStats* stats);
 
 }  // namespace clbdpt
