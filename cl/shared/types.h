@@ -192,6 +192,11 @@ typedef struct {
     clbdpt_int pad0, pad1;
 } RenderParams;
 
+/* Work items of a pass with pixel_stride `stride` over a width x height film. */
+inline clbdpt_int render_item_count(clbdpt_int width, clbdpt_int height, clbdpt_int stride) {
+    return ((width + stride - 1) / stride) * ((height + stride - 1) / stride);
+}
+
 /* The pixel (y * width + x) of work item `item` in a launch with pixel_stride `stride`. */
 inline clbdpt_int render_item_pixel(clbdpt_int item, clbdpt_int width, clbdpt_int stride) {
     clbdpt_int columns = (width + stride - 1) / stride;

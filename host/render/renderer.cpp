@@ -58,8 +58,7 @@ Renderer::Renderer(DeviceContext& device, const DeviceScene& scene, const Render
                    std::shared_ptr<SceneBuffers> buffers)
     : device_(device), scene_(scene), options_(options), scene_buffers_(std::move(buffers)) {
     if (options.max_depth < 0) throw Error("--max-depth must be >= 0");
-    if (!(options.light_subpaths >= 0.0f && options.light_subpaths <= 1.0f))
-        throw Error("light subpaths per sample must lie in [0, 1]");
+    set_strategy_mix(options.light_subpaths, options.inner_connections);  // validates it
     if (options.sampler == SamplerKind::ZSobol) {
         // ZSobol orders a known number of samples per pixel (cl/rng.h).
         if (options.time_budget > 0) throw Error("--sampler zsobol needs --spp: it orders a known number of samples");
@@ -134,8 +133,6 @@ void Renderer::set_strategy_mix(float light_subpaths, bool inner_connections) {
 }
 
 void Renderer::run_batch(Film& film, const PassSpec& pass, int first_item, int item_count) {
-    const int pixel_count = item_count;
-    const uint32_t sample_index = pass.sample_index;
     RenderParams params{};
     params.width = scene_.camera.width;
     params.height = scene_.camera.height;
@@ -158,20 +155,20 @@ void Renderer::run_batch(Film& film, const PassSpec& pass, int first_item, int i
         kernel_.setArg(kParamsArg, params);
         if (local_size_ > 0) {
             const size_t local = size_t(local_size_);
-            const size_t global = (size_t(pixel_count) + local - 1) / local * local;
+            const size_t global = (size_t(item_count) + local - 1) / local * local;
             queue.enqueueNDRangeKernel(kernel_, cl::NullRange, cl::NDRange(global), cl::NDRange(local), nullptr,
                                        &kernel_done);
         } else {
-            queue.enqueueNDRangeKernel(kernel_, cl::NullRange, cl::NDRange(size_t(pixel_count)), cl::NullRange, nullptr,
+            queue.enqueueNDRangeKernel(kernel_, cl::NullRange, cl::NDRange(size_t(item_count)), cl::NullRange, nullptr,
                                        &kernel_done);
         }
-        queue.enqueueReadBuffer(camera_out_, CL_FALSE, 0, sizeof(cl_float4) * pixel_count, camera_host_.data(), nullptr,
+        queue.enqueueReadBuffer(camera_out_, CL_FALSE, 0, sizeof(cl_float4) * item_count, camera_host_.data(), nullptr,
                                 &camera_read);
-        queue.enqueueReadBuffer(splats_, CL_TRUE, 0, sizeof(SplatRecord) * size_t(pixel_count) * splat_slots_,
+        queue.enqueueReadBuffer(splats_, CL_TRUE, 0, sizeof(SplatRecord) * size_t(item_count) * splat_slots_,
                                 splats_host_.data(), nullptr, &splats_read);
         if (strategy_slots_ > 0)
             queue.enqueueReadBuffer(strategy_out_, CL_TRUE, 0,
-                                    sizeof(SplatRecord) * size_t(pixel_count) * strategy_slots_, strategy_host_.data(),
+                                    sizeof(SplatRecord) * size_t(item_count) * strategy_slots_, strategy_host_.data(),
                                     nullptr, &strategies_read);
         if (device_.profiling()) {
             auto seconds = [](const cl::Event& e) {
@@ -188,12 +185,12 @@ void Renderer::run_batch(Film& film, const PassSpec& pass, int first_item, int i
     }
     const auto accumulate_start = std::chrono::steady_clock::now();
     const int width = params.width;
-    for (int i = 0; i < pixel_count; ++i) {
+    for (int i = 0; i < item_count; ++i) {
         const cl_float4& c = camera_host_[i];
         const int pixel = render_item_pixel(first_item + i, width, pass.pixel_stride);
         if (!std::isfinite(c.s[0]) || !std::isfinite(c.s[1]) || !std::isfinite(c.s[2]))
             throw Error("non-finite radiance at pixel (" + std::to_string(pixel % width) + ", " +
-                        std::to_string(pixel / width) + ") sample " + std::to_string(sample_index) +
+                        std::to_string(pixel / width) + ") sample " + std::to_string(pass.sample_index) +
                         " (a bug: please report it with the scene)");
         double* dst = &film.camera_sum[size_t(pixel) * 3];
         dst[0] += c.s[0];
@@ -201,12 +198,12 @@ void Renderer::run_batch(Film& film, const PassSpec& pass, int first_item, int i
         dst[2] += c.s[2];
         stats_.rays += uint64_t(c.s[3]);
     }
-    for (size_t k = 0; k < size_t(pixel_count) * splat_slots_; ++k) {
+    for (size_t k = 0; k < size_t(item_count) * splat_slots_; ++k) {
         const SplatRecord& r = splats_host_[k];
         if (r.pixel < 0) continue;
         if (!std::isfinite(r.r) || !std::isfinite(r.g) || !std::isfinite(r.b))
             throw Error("non-finite light-image splat at pixel index " + std::to_string(r.pixel) + " sample " +
-                        std::to_string(sample_index) + " (a bug: please report it with the scene)");
+                        std::to_string(pass.sample_index) + " (a bug: please report it with the scene)");
         double* dst = &film.light_sum[size_t(r.pixel) * 3];
         dst[0] += r.r;
         dst[1] += r.g;
@@ -218,7 +215,7 @@ void Renderer::run_batch(Film& film, const PassSpec& pass, int first_item, int i
             film.strategy_sum.assign(pixels * 3 * strategy_slots_, 0.0);
             film.strategy_stride = options_.max_depth + 3;
         }
-        for (size_t k = 0; k < size_t(pixel_count) * strategy_slots_; ++k) {
+        for (size_t k = 0; k < size_t(item_count) * strategy_slots_; ++k) {
             const SplatRecord& r = strategy_host_[k];
             if (r.pixel < 0) continue;
             double* dst = &film.strategy_sum[((k % strategy_slots_) * pixels + size_t(r.pixel)) * 3];
@@ -227,7 +224,7 @@ void Renderer::run_batch(Film& film, const PassSpec& pass, int first_item, int i
             dst[2] += r.b;
         }
     }
-    stats_.samples += uint64_t(pixel_count);
+    stats_.samples += uint64_t(item_count);
     stats_.profile.accumulate_seconds +=
         std::chrono::duration<double>(std::chrono::steady_clock::now() - accumulate_start).count();
 }
@@ -243,9 +240,7 @@ void Renderer::render_passes(Film& film, uint32_t first_sample, int count) {
 
 void Renderer::render_pass(Film& film, const PassSpec& pass) {
     if (pass.pixel_stride < 1) throw Error("pixel stride must be at least 1");
-    const int width = scene_.camera.width, height = scene_.camera.height;
-    const int s = pass.pixel_stride;
-    const int items = ((width + s - 1) / s) * ((height + s - 1) / s);
+    const int items = render_item_count(scene_.camera.width, scene_.camera.height, pass.pixel_stride);
     for (int first = 0; first < items; first += batch_items_)
         run_batch(film, pass, first, std::min(batch_items_, items - first));
     ++film.spp;

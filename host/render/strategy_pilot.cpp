@@ -27,10 +27,6 @@ int pilot_stride(int width, int height) {
     return std::max(1, int(std::lround(std::sqrt(ratio))));
 }
 
-int sparse_items(int width, int height, int stride) {
-    return ((width + stride - 1) / stride) * ((height + stride - 1) / stride);
-}
-
 // Half the mean squared difference of two sparse passes over the grid's pixels and channels:
 // the variance of one full-density sample. The light image of a sparse pass holds the light
 // subpaths of 1/share of the pixels, so its variance is share times that of a full pass.
@@ -77,7 +73,7 @@ std::string describe_strategy_mix(Integrator integrator, float light_subpaths, b
 }
 
 uint64_t strategy_pilot_samples(int width, int height) {
-    return uint64_t(sparse_items(width, height, pilot_stride(width, height))) * kPilotPassesPerCandidate *
+    return uint64_t(render_item_count(width, height, pilot_stride(width, height))) * kPilotPassesPerCandidate *
            strategy_candidates().size();
 }
 
@@ -94,7 +90,7 @@ StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene
     const int k = int(pilot.candidates.size());
     const int width = scene.camera.width, height = scene.camera.height;
     pilot.pixel_stride = pilot_stride(width, height);
-    const int items = sparse_items(width, height, pilot.pixel_stride);
+    const int items = render_item_count(width, height, pilot.pixel_stride);
     const double full_per_sparse = double(width) * double(height) / items;
 
     // One renderer per integrator, sharing the uploaded scene; the bdpt one changes its mix.
