@@ -7,8 +7,12 @@
  *   MATERIAL_GLASS    smooth dielectric, Fresnel-weighted choice of reflection or refraction
  *                     (delta); radiance through a refraction is scaled by (eta_i / eta_t)^2,
  *                     importance is not (the asymmetry of non-symmetric scattering, seed 1.4)
- * Reflection is two-sided; whether wi and wo are on the same side is decided by the geometric
- * normal, the lobes are evaluated in the shading frame (pbrt-v3 BSDF::f). */
+ * Reflection is two-sided. The lobes live in the shading frame; f is non-zero only where wo and
+ * wi lie on the same side of both the shading normal (where bsdf_pdf is non-zero: sampling the
+ * BSDF can reach every direction that f lets light through, so estimators that sample it and
+ * estimators that join lights agree) and the geometric one (no light through the surface).
+ * pbrt-v3 tests the geometric side only; near the terminator of a smooth-shaded coarse mesh its
+ * f is then non-zero where its density is 0, and its path tracer and light tracer disagree. */
 #ifndef CLBDPT_BSDF_H
 #define CLBDPT_BSDF_H
 
@@ -121,13 +125,12 @@ inline float fresnel_dielectric(float cos_i, float eta_outside, float eta_inside
 
 /* f(wo, wi) for world-space unit directions; 0 for the delta lobes. */
 inline float3 bsdf_f(const Bsdf* b, float3 wo_world, float3 wi_world) {
+    if (bsdf_is_specular(b)) return (float3)(0.0f);
     float3 wo = to_local(&b->frame, wo_world), wi = to_local(&b->frame, wi_world);
-    if (wo.z == 0.0f) return (float3)(0.0f);
-    int reflect = dot(wi_world, b->ng) * dot(wo_world, b->ng) > 0.0f;
-    if (!reflect || bsdf_is_specular(b)) return (float3)(0.0f);
+    if (wo.z * wi.z <= 0.0f || dot(wi_world, b->ng) * dot(wo_world, b->ng) <= 0.0f) return (float3)(0.0f);
     float3 f = b->kd * INV_PI_F;
 #ifdef HAS_GLOSSY
-    if (b->kind == MATERIAL_GLOSSY && wo.z * wi.z > 0.0f) f += glossy_f_local(b, wo, wi);
+    if (b->kind == MATERIAL_GLOSSY) f += glossy_f_local(b, wo, wi);
 #endif
     return f;
 }

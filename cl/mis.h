@@ -16,10 +16,21 @@
 #include "strategies.h"
 #include "vertex.h"
 
-/* A density of 0 marks a delta lobe or a vertex that cannot be sampled from that side; it
- * must not zero the ratio product, so it counts as 1 (seed 5.4.2, remap0). Those strategies
- * are excluded by the delta tests anyway. */
-inline float remap0(float f) { return f != 0.0f ? f : 1.0f; }
+/* One factor p_rev / p_fwd of the ratio recursion. A density of 0 is a convention where a
+ * delta lobe or a delta light sampled the vertex: it stands for a delta factor that the two
+ * strategies of the ratio share, so it counts as 1 (seed 5.4.2, remap0); the strategies that
+ * would have to connect through the delta are excluded by the delta tests. Any other 0 is a
+ * real density: a reverse density of 0 means this strategy, and every one further along on
+ * the same side (their densities contain the same factor), cannot produce the path (a direction
+ * across the shading normal's terminator band, a point outside a spot light's cone), so the
+ * side's sum ends there (returns 0). A forward density of 0 that is no convention means the
+ * strategy that made the path could not have made it (float rounding on a grazing direction):
+ * the ratio is taken as 0 as well, which keeps the weight finite. */
+inline float mis_ratio(float pdf_rev, int rev_is_delta, float pdf_fwd, int fwd_is_delta) {
+    if (pdf_rev == 0.0f && rev_is_delta) pdf_rev = 1.0f;
+    if (pdf_fwd == 0.0f && fwd_is_delta) pdf_fwd = 1.0f;
+    return pdf_rev > 0.0f && pdf_fwd > 0.0f ? pdf_rev / pdf_fwd : 0.0f;
+}
 
 /* mix: the strategies in use and their sample counts (cl/strategies.h).
  * sampled: the vertex the connection sampled afresh (camera vertex for t = 1, light vertex for
@@ -54,17 +65,23 @@ inline float mis_weight(const SceneData* scene, const StrategyMix* mix, const Pa
     /* With sample counts n_i (cl/strategies.h) each term is n_i p_i / (n_s p_s). */
     float inv_count = 1.0f / strategy_sample_count(mix, s, t);
     float sum_ri = 0.0f;
-    /* Camera side: r_i for strategies (s + t - i, i), i = t-1 .. 1. */
+    /* Camera side: r_i for strategies (s + t - i, i), i = t-1 .. 1. Vertex i's reverse density
+     * is a convention when vertex i+1 is a delta vertex of the subpath (the connection's pt is
+     * not), its forward density when vertex i-1 is. */
     float ri = 1.0f;
     for (int i = t - 1; i > 0; --i) {
         float pdf_rev = i == t - 1 ? pt_pdf_rev : (i == t - 2 ? pt_minus_pdf_rev : camera_path[i].pdf_rev);
         float pdf_fwd = i == t - 1 ? pt.pdf_fwd : camera_path[i].pdf_fwd;
         int delta = i == t - 1 ? 0 : camera_path[i].delta;
-        ri *= remap0(pdf_rev) / remap0(pdf_fwd);
+        int rev_is_delta = i + 1 < t - 1 && camera_path[i + 1].delta;
+        ri *= mis_ratio(pdf_rev, rev_is_delta, pdf_fwd, camera_path[i - 1].delta);
+        if (ri == 0.0f) break;
         if (!delta && !camera_path[i - 1].delta && strategy_enabled(mix, s + t - i, i, light_is_area))
             sum_ri += ri * strategy_sample_count(mix, s + t - i, i) * inv_count;
     }
-    /* Light side: r_i for strategies (i, s + t - i), i = s-1 .. 0. */
+    /* Light side: r_i for strategies (i, s + t - i), i = s-1 .. 0, with the same conventions;
+     * the light vertex's own densities are conventions for a delta light as well (a point's
+     * position, a direction's direction). */
     ri = 1.0f;
     for (int i = s - 1; i >= 0; --i) {
         float pdf_rev = i == s - 1 ? qs_pdf_rev : (i == s - 2 ? qs_minus_pdf_rev : light_path[i].pdf_rev);
@@ -72,7 +89,9 @@ inline float mis_weight(const SceneData* scene, const StrategyMix* mix, const Pa
         int delta = i == s - 1 ? 0 : light_path[i].delta;
         int delta_light_vertex = i > 0 ? light_path[i - 1].delta
                                        : vertex_is_delta_light(scene, s == 1 ? &qs : &light_path[0]);
-        ri *= remap0(pdf_rev) / remap0(pdf_fwd);
+        int rev_is_delta = (i + 1 < s - 1 && light_path[i + 1].delta) || (i == 0 && delta_light_vertex);
+        ri *= mis_ratio(pdf_rev, rev_is_delta, pdf_fwd, delta_light_vertex);
+        if (ri == 0.0f) break;
         if (!delta && !delta_light_vertex && strategy_enabled(mix, i, s + t - i, light_is_area))
             sum_ri += ri * strategy_sample_count(mix, i, s + t - i) * inv_count;
     }

@@ -156,6 +156,34 @@ struct SceneBuilder {
         }
     }
 
+    // Latitude-longitude sphere of `segments` x `rings` quads (triangles at the poles), the
+    // coarse tessellation exporters write for low-poly models, facing outward. smooth: each
+    // corner carries the exact sphere normal (an OBJ's `vn`), so the shading normals differ
+    // from the facets' by up to half a segment's angle and the terminator bands exist.
+    void uv_sphere(Vec3 center, float radius, int segments, int rings, bool smooth, int material) {
+        const float pi = 3.14159265358979323846f;
+        auto unit = [&](int ring, int segment) {
+            const float theta = pi * float(ring) / float(rings), phi = 2.0f * pi * float(segment % segments) / float(segments);
+            return Vec3{std::sin(theta) * std::cos(phi), std::cos(theta), -std::sin(theta) * std::sin(phi)};
+        };
+        auto add = [&](Vec3 a, Vec3 b, Vec3 c) {  // unit directions, counter-clockwise from outside
+            triangle(center + a * radius, center + b * radius, center + c * radius, material);
+            if (!smooth) return;
+            TriangleNormals tn{};
+            tn.n0 = float4_of(a);
+            tn.n1 = float4_of(b);
+            tn.n2 = float4_of(c);
+            scene.infos.back().normals = int(scene.normals.size());
+            scene.normals.push_back(tn);
+        };
+        for (int r = 0; r < rings; ++r)
+            for (int k = 0; k < segments; ++k) {
+                const Vec3 a = unit(r, k), b = unit(r + 1, k), c = unit(r + 1, k + 1), d = unit(r, k + 1);
+                if (r > 0) add(a, b, d);
+                if (r + 1 < rings) add(d, b, c);
+            }
+    }
+
     void camera(Vec3 eye, Vec3 target, float fov_degrees, Vec3 up = {0, 1, 0}) {
         scene.camera.eye = eye;
         scene.camera.target = target;
