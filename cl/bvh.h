@@ -1,6 +1,7 @@
 /* Ray queries against the BVH of cl/shared/types.h (built by host/bvh/bvh.cpp):
  *   intersect: the closest hit with t in (0, tmax);
- *   occluded:  whether anything is hit with t in (0, tmax).
+ *   occluded:  whether anything is hit with t in (0, tmax), both ends exclusive by the
+ *              rounding error of t.
  * With HAS_CUTOUTS, hits that `cutouts` says are holes (cl/cutouts.h) do not count; callers
  * without cut-outs pass a null pointer.
  * Triangles are two-sided. The ray-triangle test is the watertight one of Woop, Benthin and
@@ -22,10 +23,6 @@
 #ifdef cl_khr_fp64
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
 #endif
-
-/* pbrt's gamma(n) = n u / (1 - n u), u = 2^-24: bound on the relative error of n rounded float
- * operations (pbrt-v3 section 3.9.1). */
-#define BVH_GAMMA(n) ((float)(n) * 0x1p-24f / (1.0f - (float)(n) * 0x1p-24f))
 
 /* Direction components smaller than this in magnitude are replaced by it (with their sign) in
  * the inverse direction of the slab test, so the inverse stays finite and (plane - o) * inv_d
@@ -106,18 +103,22 @@ __attribute__((always_inline)) inline bvh_intn bvh_hit_boxes(__global const BvhN
     bvh_floatn tz0 = (bvh_vloadn(0, node->bounds[r->nz]) - r->oz) * r->iz;
     bvh_floatn tz1 = (bvh_vloadn(0, node->bounds[r->nz ^ 1]) - r->oz) * r->iz;
     bvh_floatn t0 = max(max(tx0, ty0), max(tz0, 0.0f));
-    bvh_floatn t1 = min(min(tx1, ty1), min(tz1, tmax)) * (1.0f + 2.0f * BVH_GAMMA(3));
+    bvh_floatn t1 = min(min(tx1, ty1), min(tz1, tmax)) * (1.0f + 2.0f * FLOAT_GAMMA(3));
     *t_near = t0;
     return t0 <= t1;
 }
 
 /* Watertight ray-triangle test (Woop et al. 2013; pbrt-v3 Triangle::Intersect, float version).
  * v: the triangle's 12 floats (p0, p1, p2 as float4). On a hit with t in (0, tmax) returns true
- * and sets *t and the barycentrics of p1 and p2. A ray through an edge or a vertex (an edge
+ * and sets *t and the barycentrics of p1 and p2. Hits whose t could be 0 or less through
+ * rounding do not count; with below_tmax set, neither do those whose t could be tmax or more
+ * (visibility between two points: the far point's own surface, just beyond tmax, must not
+ * block). A ray through an edge or a vertex (an edge
  * function exactly 0) hits every triangle sharing it, which is what makes the test
  * watertight. */
 __attribute__((always_inline)) inline bool bvh_hit_triangle(__global const float* v, const BvhRay* r, float tmax,
-                                                            float* t_out, float* b1_out, float* b2_out) {
+                                                            bool below_tmax, float* t_out, float* b1_out,
+                                                            float* b2_out) {
     /* Watertightness needs both triangles sharing an edge to compute its edge function the
      * same way up to sign: a*b - c*d contracted to fma(a, b, -c*d) is not antisymmetric in
      * its operands and could make both reject a ray through the edge. (Scoped to this
@@ -165,15 +166,15 @@ __attribute__((always_inline)) inline bool bvh_hit_triangle(__global const float
     /* Make sure t is conservatively greater than zero (pbrt-v3 section 3.9.6): reject hits
      * whose t could be positive only through rounding. */
     float max_zt = max(max(fabs(p0z), fabs(p1z)), fabs(p2z));
-    float delta_z = BVH_GAMMA(3) * max_zt;
+    float delta_z = FLOAT_GAMMA(3) * max_zt;
     float max_xt = max(max(fabs(p0x), fabs(p1x)), fabs(p2x));
     float max_yt = max(max(fabs(p0y), fabs(p1y)), fabs(p2y));
-    float delta_x = BVH_GAMMA(5) * (max_xt + max_zt);
-    float delta_y = BVH_GAMMA(5) * (max_yt + max_zt);
-    float delta_e = 2.0f * (BVH_GAMMA(2) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
+    float delta_x = FLOAT_GAMMA(5) * (max_xt + max_zt);
+    float delta_y = FLOAT_GAMMA(5) * (max_yt + max_zt);
+    float delta_e = 2.0f * (FLOAT_GAMMA(2) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
     float max_e = max(max(fabs(e0), fabs(e1)), fabs(e2));
-    float delta_t = 3.0f * (BVH_GAMMA(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) * fabs(inv_det);
-    if (t <= delta_t) return false;
+    float delta_t = 3.0f * (FLOAT_GAMMA(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) * fabs(inv_det);
+    if (t <= delta_t || (below_tmax && t >= tmax - delta_t)) return false;
 
     *t_out = t;
     *b1_out = e1 * inv_det;
@@ -268,7 +269,7 @@ inline bool intersect(__global const BvhNode* nodes, __global const Triangle* tr
             int first = BVH_LEAF_FIRST(current), end = first + BVH_LEAF_COUNT(current);
             for (int i = first; i < end; ++i) {
                 float t, b1, b2;
-                if (bvh_hit_triangle((__global const float*)(tris + i), &r, hit->t, &t, &b1, &b2)) {
+                if (bvh_hit_triangle((__global const float*)(tris + i), &r, hit->t, false, &t, &b1, &b2)) {
 #ifdef HAS_CUTOUTS
                     if (cutouts && cutout_hides(cutouts, i, b1, b2)) continue;
 #endif
@@ -294,7 +295,7 @@ __attribute__((always_inline)) inline bool bvh_leaf_occluded(__global const Tria
     int first = BVH_LEAF_FIRST(leaf), end = first + BVH_LEAF_COUNT(leaf);
     for (int i = first; i < end; ++i) {
         float t, b1, b2;
-        if (bvh_hit_triangle((__global const float*)(tris + i), r, tmax, &t, &b1, &b2)) {
+        if (bvh_hit_triangle((__global const float*)(tris + i), r, tmax, true, &t, &b1, &b2)) {
 #ifdef HAS_CUTOUTS
             if (cutouts && cutout_hides(cutouts, i, b1, b2)) continue;
 #endif
@@ -304,7 +305,8 @@ __attribute__((always_inline)) inline bool bvh_leaf_occluded(__global const Tria
     return false;
 }
 
-/* Whether anything is hit along o + t d with t in (0, tmax): shadow rays, visibility tests.
+/* Whether anything is hit along o + t d with t certainly in (0, tmax) (hits within rounding of
+ * either end do not count): shadow rays, visibility tests.
  * Leaf children are tested as soon as the ray is found to enter their box, before any interior
  * child: leaves high in the tree hold large triangles (walls, floors), the likeliest occluders
  * (about 3x faster than visiting them in distance order on traversal_bench's random any-hit

@@ -35,15 +35,9 @@ inline float3 connect_bdpt(const SceneData* scene, const StrategyMix* mix, Rng* 
         float dist, pdf_w;
         float we = camera_sample_wi(&scene->camera, qs->p, u, &lens_point, &wi, &dist, &pdf_w, raster);
         if (pdf_w > 0.0f && we > 0.0f) {
-            sampled.type = VERTEX_CAMERA;
-            sampled.p = lens_point;
-            sampled.ng = xyz(scene->camera.forward);
-            sampled.ns = sampled.ng;
+            /* The lens is no scene surface: nothing to offset its point from. */
+            sampled = vertex_at(VERTEX_CAMERA, lens_point, xyz(scene->camera.forward), 0.0f);
             sampled.beta = (float3)(we / pdf_w);
-            sampled.pdf_fwd = 0.0f;
-            sampled.pdf_rev = 0.0f;
-            sampled.delta = 0;
-            sampled.light = -1;
             L = qs->beta * vertex_f(scene, qs, &sampled, TRANSPORT_IMPORTANCE) * sampled.beta;
             if (vertex_on_surface(qs)) L *= fabs(dot(wi, qs->ns));
             if (!is_black(L) && !vertices_visible(scene, qs, &sampled)) L = (float3)(0.0f);
@@ -58,14 +52,9 @@ inline float3 connect_bdpt(const SceneData* scene, const StrategyMix* mix, Rng* 
         int light = sample_light_index(scene, u_light, &select_pdf);
         LightSample ls;
         if (light_sample_li(scene, light, pt->p, u, &ls)) {
-            sampled.type = VERTEX_LIGHT;
-            sampled.p = ls.p;
-            sampled.ng = ls.n;
-            sampled.ns = ls.n;
+            sampled = vertex_at(VERTEX_LIGHT, ls.p, ls.n, ls.p_error);
             sampled.beta = ls.li / (ls.pdf_w * select_pdf);
-            sampled.delta = 0;
             sampled.light = light;
-            sampled.pdf_rev = 0.0f;
             sampled.pdf_fwd = vertex_pdf_light_origin(scene, &sampled, pt);
             L = pt->beta * vertex_f(scene, pt, &sampled, TRANSPORT_RADIANCE) * sampled.beta;
             if (vertex_on_surface(pt)) L *= fabs(dot(ls.wi, pt->ns));

@@ -10,6 +10,7 @@
 #define CLBDPT_LIGHTS_H
 
 #include "geometry.h"
+#include "ray.h"
 #include "sampling.h"
 #include "scene.h"
 
@@ -34,8 +35,22 @@ inline float3 triangle_normal(__global const Triangle* tri) {
     return normalize(cross(p1 - p0, p2 - p0));
 }
 
+/* The point of barycentrics b (of p1 and p2) as p0 + b1 (p1 - p0) + b2 (p2 - p0): an affine
+ * combination whatever the rounding of b, so its only error off the plane is the rounding of
+ * these few operations, bounded by triangle_point_error. */
 inline float3 triangle_point(__global const Triangle* tri, float2 b) {
-    return xyz(tri->p0) * (1.0f - b.x - b.y) + xyz(tri->p1) * b.x + xyz(tri->p2) * b.y;
+    float3 p0 = xyz(tri->p0);
+    return p0 + (xyz(tri->p1) - p0) * b.x + (xyz(tri->p2) - p0) * b.y;
+}
+
+/* A bound on the distance of triangle_point(tri, b) from the triangle's plane, along its unit
+ * normal n: each coordinate is off by at most gamma(4) (|p0| + |b1 e1| + |b2 e2|) (the edge
+ * e1 = p1 - p0 rounded once, its product with b1 once, two sums; pbrt-v3 eq. 3.15 bounds the
+ * form b0 p0 + b1 p1 + b2 p2 likewise, with gamma(7)). */
+inline float triangle_point_error(__global const Triangle* tri, float2 b, float3 n) {
+    float3 p0 = xyz(tri->p0);
+    float3 magnitude = fabs(p0) + fabs((xyz(tri->p1) - p0) * b.x) + fabs((xyz(tri->p2) - p0) * b.y);
+    return FLOAT_GAMMA(4) * dot(fabs(n), magnitude);
 }
 
 /* Radiance le leaving an area light at a point with geometric normal n, seen in direction w:
@@ -152,6 +167,7 @@ inline float3 environment_sample_direction(const SceneData* scene, float2 u, flo
 typedef struct {
     float3 p;     /* point on the light; for infinite lights a point 2 radii away along wi */
     float3 n;     /* geometric normal at p (area lights), else 0 */
+    float p_error; /* area lights: bound on p's distance from the light's plane (cl/ray.h) */
     float3 wi;    /* unit direction from ref toward the light */
     float3 li;    /* incident radiance (area, environment) or its delta-light counterpart */
     float pdf_w;  /* solid angle at ref; 1 for delta lights */
@@ -160,6 +176,7 @@ typedef struct {
 inline int light_sample_li(const SceneData* scene, int index, float3 ref, float2 u, LightSample* ls) {
     __global const Light* light = &scene->lights[index];
     ls->n = (float3)(0.0f);
+    ls->p_error = 0.0f;
     ls->li = (float3)(0.0f);
     ls->pdf_w = 0.0f;
     switch (light->kind) {
@@ -169,6 +186,7 @@ inline int light_sample_li(const SceneData* scene, int index, float3 ref, float2
         float2 b = sample_uniform_triangle(u);
         ls->p = triangle_point(tri, b);
         ls->n = triangle_normal(tri);
+        ls->p_error = triangle_point_error(tri, b, ls->n);
         float3 d = ls->p - ref;
         float d2 = length_squared(d);
         if (d2 == 0.0f) return 0;
@@ -221,6 +239,7 @@ typedef struct {
     float3 origin;
     float3 dir;     /* unit */
     float3 n;       /* normal at the origin used for the cosine in beta (pbrt's nLight) */
+    float origin_error; /* area lights: bound on the origin's distance from the light's plane */
     float3 le;      /* emitted radiance (area, environment) or intensity (point, spot) */
     float pdf_pos;
     float pdf_dir;
@@ -240,6 +259,7 @@ inline int light_sample_le(const SceneData* scene, int index, float2 u_pos, floa
     er->le = (float3)(0.0f);
     er->pdf_pos = 0.0f;
     er->pdf_dir = 0.0f;
+    er->origin_error = 0.0f;
     switch (light->kind) {
 #ifdef HAS_AREA_LIGHTS
     case LIGHT_AREA: {
@@ -247,6 +267,7 @@ inline int light_sample_le(const SceneData* scene, int index, float2 u_pos, floa
         float2 b = sample_uniform_triangle(u_pos);
         er->origin = triangle_point(tri, b);
         er->n = triangle_normal(tri);
+        er->origin_error = triangle_point_error(tri, b, er->n);
         Frame f = frame_from_normal(er->n);
         float3 w_local = sample_cosine_hemisphere(u_dir);
         er->dir = from_local(&f, w_local);

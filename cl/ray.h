@@ -12,35 +12,30 @@ typedef struct {
     int triangle;
 } Hit;
 
-/* Self-intersection avoidance after Wächter and Binder, "A Fast and Robust Method for Avoiding
- * Self-Intersection" (Ray Tracing Gems, ch. 6, 2019): the new origin is p moved along the
- * geometric normal to the side that w leaves towards, by a fixed number of ULPs of each
- * coordinate, so the offset scales with the magnitude of p (the floating-point error of a hit
- * point computed from barycentrics grows with it). Coordinates near zero, where an ULP is
- * tiny, are moved by a fixed distance instead.
- *
- * RAY_OFFSET_INT_SCALE: ULPs per unit of normal component (up to 256 ULPs, about 3e-5 relative).
- * RAY_OFFSET_FLOAT_SCALE: absolute offset per unit of normal component for |p| < ORIGIN.
- * RAY_OFFSET_ORIGIN: below this magnitude a coordinate is offset absolutely (at 1/32, 256 ULPs
- * are about 1e-6, below the absolute offset 1.5e-5, so the switch only grows the offset).
- * Values as in the paper, for scenes of roughly unit to thousand-unit scale. */
-#define RAY_OFFSET_ORIGIN (1.0f / 32.0f)
-#define RAY_OFFSET_FLOAT_SCALE (1.0f / 65536.0f)
-#define RAY_OFFSET_INT_SCALE 256.0f
+/* pbrt's gamma(n) = n u / (1 - n u), u = 2^-24: a bound on the relative error of n rounded
+ * float operations (pbrt-v3 section 3.9.1). */
+#define FLOAT_GAMMA(n) ((float)(n) * 0x1p-24f / (1.0f - (float)(n) * 0x1p-24f))
 
-/* p: a point on a surface; ng: the surface's unit geometric normal (either orientation); w: the
- * direction the new ray will leave in. Returns the origin to use for a ray from p along w (or
- * for a shadow ray from p towards a point in direction w). p should be interpolated from the
- * triangle's corners with the hit's barycentrics, not computed as o + t d: the error of the
- * latter scales with |o| and t, not with |p|, and can exceed the offset (a hit on a wall at
- * x = 0 seen from x = 278 lands up to ~1e-4 off the wall). */
-inline float3 offset_ray_origin(float3 p, float3 ng, float3 w) {
-    float3 n = dot(ng, w) < 0.0f ? -ng : ng;
-    int3 of_i = convert_int3(RAY_OFFSET_INT_SCALE * n);
-    /* Moving the integer representation changes the magnitude; for negative coordinates an
-     * increase of the bits moves towards -infinity, hence the sign flip. */
-    float3 p_i = as_float3(as_int3(p) + select(of_i, -of_i, p < 0.0f));
-    return select(p_i, p + RAY_OFFSET_FLOAT_SCALE * n, fabs(p) < RAY_OFFSET_ORIGIN);
+/* Ray origins off surfaces, after pbrt-v3 section 3.9.5: a point computed on a triangle carries
+ * a bound `p_error` on its distance from the triangle's plane (measured along the normal, from
+ * the rounding of the computation that produced it: triangle_point_error, a few ULPs of its
+ * coordinates); a ray leaving it starts that far off the plane on the side it leaves toward,
+ * rounded away from the surface. The true surface is then behind the origin, so the
+ * conservative hit test of cl/bvh.h (which rejects t that is positive only through rounding)
+ * cannot find it again, and nothing else is skipped: the offset is as small as the point's own
+ * error, at any distance from the scene's origin (a fixed number of ULPs of |p|, as before,
+ * is 0.12 units at 5560 and turned a 0.56-unit box 3% darker there).
+ *
+ * p: a point on a surface; ng: the surface's unit geometric normal (either orientation, 0 off
+ * surfaces: no offset); p_error: p's error bound along ng; w: the direction the new ray leaves
+ * in (or toward the point a shadow ray goes to). */
+inline float3 offset_ray_origin(float3 p, float3 ng, float p_error, float3 w) {
+    float3 offset = (dot(ng, w) < 0.0f ? -p_error : p_error) * ng;
+    float3 o = p + offset;
+    /* One ULP further away from p where the offset moves a coordinate, so the rounding of the
+     * sum cannot take back part of the offset. */
+    float3 away = select((float3)(-INFINITY), (float3)(INFINITY), offset > 0.0f);
+    return select(o, nextafter(o, away), offset != 0.0f);
 }
 
 #endif

@@ -17,10 +17,9 @@
 inline void surface_vertex_from_hit(const SceneData* scene, const PathVertex* prev, const Hit* hit, PathVertex* v) {
     __global const Triangle* tri = &scene->triangles[hit->triangle];
     TriangleInfo info = scene->infos[hit->triangle];
-    v->type = VERTEX_SURFACE;
-    v->p = triangle_point(tri, (float2)(hit->b1, hit->b2));
-    v->ng = triangle_normal(tri);
-    v->ns = v->ng;
+    float2 b = (float2)(hit->b1, hit->b2);
+    float3 ng = triangle_normal(tri);
+    *v = vertex_at(VERTEX_SURFACE, triangle_point(tri, b), ng, triangle_point_error(tri, b, ng));
 #ifdef HAS_SHADING_NORMALS
     if (info.normals >= 0) {
         __global const TriangleNormals* tn = &scene->normals[info.normals];
@@ -31,7 +30,7 @@ inline void surface_vertex_from_hit(const SceneData* scene, const PathVertex* pr
     }
 #endif
 #ifdef HAS_TEXTURES
-    float2 uv = triangle_uv(scene->uvs, hit->triangle, hit->b1, hit->b2);
+    float2 uv = triangle_uv(scene->uvs, hit->triangle, b.x, b.y);
     __global const Material* m = &scene->materials[info.material];
     textured_reflectances(scene, m, uv, &v->kd, &v->ks);
 #ifdef HAS_BUMP_MAPS
@@ -39,13 +38,11 @@ inline void surface_vertex_from_hit(const SceneData* scene, const PathVertex* pr
 #endif
 #endif
 #ifdef HAS_EMISSION_TEXTURES
-    if (info.light >= 0) v->le = area_light_le(scene, &scene->lights[info.light], (float2)(hit->b1, hit->b2));
+    if (info.light >= 0) v->le = area_light_le(scene, &scene->lights[info.light], b);
 #endif
     v->wo = normalize(prev->p - v->p);
-    v->delta = 0;
     v->material = info.material;
     v->light = info.light;
-    v->pdf_rev = 0.0f;
 }
 
 /* Extends a subpath: path[-1] is the vertex the ray (o, d) leaves, with throughput beta and
@@ -76,15 +73,9 @@ inline int random_walk(const SceneData* scene, Rng* rng, float3 o, float3 d, flo
             /* An escaped camera ray ends on the environment light (seed ch. 6); its density
              * stays in solid angle. */
             if (mode != TRANSPORT_RADIANCE || scene->info.environment_light < 0) break;
-            vertex->type = VERTEX_LIGHT;
-            vertex->p = prev->p + d * (2.0f * scene_radius(scene));
-            vertex->ng = (float3)(0.0f);
-            vertex->ns = vertex->ng;
+            *vertex = vertex_at(VERTEX_LIGHT, prev->p + d * (2.0f * scene_radius(scene)), (float3)(0.0f), 0.0f);
             vertex->wo = -d;
-            vertex->delta = 0;
             vertex->light = scene->info.environment_light;
-            vertex->material = -1;
-            vertex->pdf_rev = 0.0f;
 #else
             break;
 #endif
@@ -116,7 +107,7 @@ inline int random_walk(const SceneData* scene, Rng* rng, float3 o, float3 d, flo
             prev->pdf_rev = 0.0f;
         }
         beta *= correct_shading_normal(vertex, vertex->wo, bs.wi, mode);
-        o = offset_ray_origin(vertex->p, vertex->ng, bs.wi);
+        o = offset_ray_origin(vertex->p, vertex->ng, vertex->p_error, bs.wi);
         d = bs.wi;
     }
     return bounces;
@@ -132,17 +123,8 @@ inline int generate_camera_subpath(const SceneData* scene, Rng* rng, float2 rast
     float pdf_pos, pdf_dir;
     camera_pdf_we(&scene->camera, o, d, &pdf_pos, &pdf_dir);
     PathVertex* cam = &path[0];
-    cam->type = VERTEX_CAMERA;
-    cam->p = o;
-    cam->ng = (float3)(0.0f);
-    cam->ns = cam->ng;
-    cam->wo = cam->ng;
+    *cam = vertex_at(VERTEX_CAMERA, o, (float3)(0.0f), 0.0f);
     cam->beta = (float3)(1.0f);
-    cam->pdf_fwd = 0.0f;
-    cam->pdf_rev = 0.0f;
-    cam->delta = 0;
-    cam->material = -1;
-    cam->light = -1;
     if (pdf_dir == 0.0f) return 1;
     return random_walk(scene, rng, o, d, cam->beta, pdf_dir, max_depth + 1, TRANSPORT_RADIANCE,
                        sample_draw_camera_bounce(0), path + 1) + 1;
@@ -163,25 +145,19 @@ inline int generate_light_subpath(const SceneData* scene, Rng* rng, int max_dept
     if (!light_sample_le(scene, light, u_pos, u_dir, &er)) return 0;
     int kind = scene->lights[light].kind;
     PathVertex* lv = &path[0];
-    lv->type = VERTEX_LIGHT;
-    lv->p = er.origin;
-    lv->ng = kind == LIGHT_AREA ? er.n : (float3)(0.0f);
-    lv->ns = lv->ng;
-    lv->wo = lv->ng;
+    *lv = kind == LIGHT_AREA ? vertex_at(VERTEX_LIGHT, er.origin, er.n, er.origin_error)
+                             : vertex_at(VERTEX_LIGHT, er.origin, (float3)(0.0f), 0.0f);
     /* The positional part of the throughput, used only when this vertex is joined straight
      * to the lens (strategy (1,1)); vertex_f then supplies the emitted radiance. */
     lv->beta = (float3)(1.0f / (select_pdf * er.pdf_pos));
     lv->pdf_fwd = er.pdf_pos * select_pdf;
-    lv->pdf_rev = 0.0f;
-    lv->delta = 0;
-    lv->material = -1;
     lv->light = light;
 #ifdef HAS_EMISSION_TEXTURES
     /* Cosine-weighted emission leaves the front face: er.le is the unmasked radiance. */
     lv->le = er.le;
 #endif
     float3 beta = er.le * (fabs(dot(er.n, er.dir)) / (select_pdf * er.pdf_pos * er.pdf_dir));
-    float3 o = kind == LIGHT_AREA ? offset_ray_origin(er.origin, er.n, er.dir) : er.origin;
+    float3 o = offset_ray_origin(lv->p, lv->ng, lv->p_error, er.dir);
     int n = random_walk(scene, rng, o, er.dir, beta, er.pdf_dir, max_depth, TRANSPORT_IMPORTANCE,
                         sample_draw_light_bounce(0), path + 1);
     if (light_is_infinite(kind)) {

@@ -44,7 +44,7 @@ RegionStats render(const DeviceScene& scene, Integrator integrator, int depth, u
 
 // Radiance is invariant under scaling the whole scene (lengths cancel between areas, solid
 // angles and squared distances), so every pixel must stay the same. At 1e-4 the Cornell box is
-// 0.055 units wide, near the absolute ray-offset range; at 1e4 its coordinates are ~5e6, where
+// 0.055 units wide; at 1e4 its coordinates are ~5e6, where
 // a float ULP is 0.5. Densities along a path change by 1e8 per vertex in both cases, which the
 // ratio form of the MIS weight must absorb.
 class SceneScaleTest : public ::testing::TestWithParam<float> {};
@@ -71,10 +71,8 @@ TEST_P(SceneScaleTest, CornellBoxImageDoesNotDependOnScale) {
             PairedStats paired = render_paired(scaled_scene, ref_scene, make_options(integrator, kDepth, 33),
                                                scaled_passes(64), kBlocks);
             // Floor of 1e-4 relative: float rounding alone leaves systematic differences of
-            // 1e-6..1e-5 (measured at 1e4), and at 1e-4 the absolute ray offset near the origin
-            // (1.5e-5, cl/ray.h) is 3e-4 of the box, which brightens the image by ~3e-5
-            // (measured: +3.0e-5 +- 0.6e-5 over 512 paired passes). Anything above 1e-4 is a
-            // scale bug.
+            // 1e-6..1e-5 (measured at 1e4; the ray offsets scale with each point's own error
+            // bound, cl/ray.h). Anything above 1e-4 is a scale bug.
             expect_same_paired(paired, kSigmas, name + " scaled vs scale 1 paired", 1e-4);
         } catch (const std::exception& e) {
             ADD_FAILURE() << name << " paired render failed: " << e.what();
@@ -86,6 +84,56 @@ INSTANTIATE_TEST_SUITE_P(Scales, SceneScaleTest, ::testing::Values(1e-4f, 1e4f),
                          [](const ::testing::TestParamInfo<float>& info) {
                              return info.param < 1 ? std::string("tiny_1e_minus_4") : std::string("huge_1e4");
                          });
+
+// ---- Far from the origin ---------------------------------------------------------------------
+
+// The Cornell box scaled to 0.556 units and moved 1e4 box widths from the origin (to x = 5560,
+// where a float ULP is 5e-4, 1/1100 of the box) renders the image it renders at the origin.
+// Ray origins must leave a surface by the error bound of the hit point, a few ULPs, and shadow
+// rays must stop at the far surface by its own bound: offsets of a fixed fraction of |p|
+// (256 ULPs, 0.12 units there: a fifth of the box) or a shadow ray shortened by 1e-4 of its
+// length darken or leak. Measured before: 27% darker at 1e4 units.
+TEST(HardCases, SmallBoxFarFromTheOriginMatchesItAtTheOrigin) {
+    Scene base = load_scene(scene_path("cornell-box"));
+    scale_scene(base, 1e-3f);
+    Scene far = base;
+    translate_scene(far, {5560.0f, 0.0f, 0.0f});
+    DeviceScene near_scene = build_device_scene(base, kFilm, kFilm);
+    DeviceScene far_scene = build_device_scene(far, kFilm, kFilm);
+    for (Integrator integrator : {Integrator::Bdpt, Integrator::Pt, Integrator::Lt}) {
+        std::string name = integrator_name(integrator);
+        RegionStats ref = render(near_scene, integrator, kDepth, 151, 64, name + " at the origin");
+        RegionStats st = render(far_scene, integrator, kDepth, 152, 64, name + " far away");
+        ASSERT_GT(ref.image_mean, 0.01);
+        expect_agree(st, ref, kSigmas, name + " far vs at the origin");
+    }
+}
+
+// A 1 x 1 light 100 units above a floor, sealed in a closed box whose bottom face is 0.004 below
+// the light (a lamp with a cover): nothing can leave the box, so every integrator renders exactly
+// black. A shadow ray shortened by 1e-4 of its length (pbrt-v3's ShadowEpsilon) stops 0.01
+// before the light, above the cover: before the far end was bounded by its own error instead,
+// pt lit the floor through it.
+TEST(HardCases, LightSealedInABoxLeaksNothing) {
+    SceneBuilder b;
+    int floor = b.material(diffuse_material({0.8f, 0.8f, 0.8f}), "floor");
+    int cover = b.material(diffuse_material({0.5f, 0.5f, 0.5f}), "cover");
+    int light = b.material(diffuse_material({0, 0, 0}, {50, 50, 50}), "light");
+    b.quad({-50, 0, -50}, {-50, 0, 50}, {50, 0, 50}, {50, 0, -50}, floor);  // facing up
+    ceiling_light(b, {0, 100, 0}, 1.0f, light);
+    b.box({-0.6f, 99.996f, -0.6f}, {0.6f, 100.01f, 0.6f}, /*inward=*/false, cover);
+    b.camera({0, 50, -60}, {0, 0, 0}, 60.0f);
+    DeviceScene scene = build_device_scene(b.scene, kFilm, kFilm);
+    for (Integrator integrator : {Integrator::Bdpt, Integrator::Pt, Integrator::Lt}) {
+        Renderer renderer(test_device(), scene, make_options(integrator, kDepth, 161));
+        Film film(kFilm, kFilm);
+        ASSERT_NO_THROW(renderer.render_passes(film, 0, 16)) << integrator_name(integrator);
+        double sum = 0;
+        for (float v : film.image()) sum += v;
+        EXPECT_EQ(sum, 0.0) << integrator_name(integrator) << ": light leaked out of the sealed box";
+        report_stat(std::string("sealed ") + integrator_name(integrator) + " sum", sum, 0, sum == 0.0);
+    }
+}
 
 // ---- Light size ------------------------------------------------------------------------------
 

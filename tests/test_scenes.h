@@ -263,6 +263,29 @@ inline void scale_scene(Scene& scene, float s) {
     }
 }
 
+// Every position in the scene moved by `offset`: vertices, camera, light positions, bounds.
+inline void translate_scene(Scene& scene, Vec3 offset) {
+    auto move = [&](cl_float4& p) {
+        for (int i = 0; i < 3; ++i) p.s[i] += offset[i];
+    };
+    Bounds3 bounds;
+    for (Triangle& t : scene.triangles) {
+        move(t.p0);
+        move(t.p1);
+        move(t.p2);
+        bounds.extend(vec3_of(t.p0));
+        bounds.extend(vec3_of(t.p1));
+        bounds.extend(vec3_of(t.p2));
+    }
+    scene.bounds = bounds;
+    scene.camera.eye = scene.camera.eye + offset;
+    scene.camera.target = scene.camera.target + offset;
+    for (LightDesc& l : scene.lights) {
+        l.position = l.position + offset;
+        l.target = l.target + offset;
+    }
+}
+
 // ---- Statistics -------------------------------------------------------------------------
 
 inline std::string current_test_name() {

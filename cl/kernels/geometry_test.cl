@@ -5,17 +5,11 @@
 
 /* A vertex from a position, a geometric and a shading normal (0 = not on a surface), its type
  * and light index. */
+/* A vertex at a point the host rounded to float from double: off its surface by at most half
+ * an ULP per coordinate, so gamma(1) |p| along ng bounds it (gamma(4) to spare). */
 inline PathVertex make_vertex(float4 p, float4 ng, float4 ns, int type, int light) {
-    PathVertex v;
-    v.p = p.xyz;
-    v.ng = ng.xyz;
+    PathVertex v = vertex_at(type, p.xyz, ng.xyz, FLOAT_GAMMA(4) * dot(fabs(ng.xyz), fabs(p.xyz)));
     v.ns = ns.xyz;
-    v.wo = (float3)(0.0f);
-    v.beta = (float3)(0.0f);
-    v.pdf_fwd = 0.0f;
-    v.pdf_rev = 0.0f;
-    v.type = type;
-    v.delta = 0;
     v.material = 0;
     v.light = light;
     return v;
@@ -50,7 +44,7 @@ __kernel void geometry_term_test(SCENE_KERNEL_ARGS, __global const float4* in, _
 }
 
 /* Per item: a point on triangle `in[2i].z` at barycentrics in[2i].xy (computed as the renderer
- * does, triangle_point), a direction in[2i + 1].xyz. The ray from offset_ray_origin(p, ng, w)
+ * does, triangle_point), a direction in[2i + 1].xyz. The ray from offset_ray_origin(p, ng, error, w)
  * along w: out[2i] = (origin, index of the triangle intersect hits or -1),
  * out[2i + 1] = (p, occluded to infinity). */
 __kernel void offset_ray_test(SCENE_KERNEL_ARGS, __global const float4* in, __global float4* out) {
@@ -59,7 +53,7 @@ __kernel void offset_ray_test(SCENE_KERNEL_ARGS, __global const float4* in, __gl
     float3 p = triangle_point(&triangles[t], in[2 * gid].xy);
     float3 ng = triangle_normal(&triangles[t]);
     float3 w = in[2 * gid + 1].xyz;
-    float3 o = offset_ray_origin(p, ng, w);
+    float3 o = offset_ray_origin(p, ng, triangle_point_error(&triangles[t], in[2 * gid].xy, ng), w);
     Hit hit;
     int found = intersect(nodes, triangles, 0, o, w, INFINITY, &hit);
     int blocked = occluded(nodes, triangles, 0, o, w, INFINITY);

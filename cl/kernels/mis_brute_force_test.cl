@@ -29,15 +29,12 @@ typedef struct {
 #define TEST_MAX_VERTICES 8
 
 inline PathVertex path_vertex(__global const TestVertex* v) {
-    PathVertex r;
-    r.p = v->p.xyz;
-    r.ng = v->ng.xyz;
+    PathVertex r = vertex_at(v->type, v->p.xyz, v->ng.xyz, 0.0f);
     r.ns = v->ns.xyz;
     r.wo = v->wo.xyz;
     r.beta = (float3)(1.0f);
     r.pdf_fwd = v->pdf_fwd;
     r.pdf_rev = v->pdf_rev;
-    r.type = v->type;
     r.delta = v->delta;
     r.material = v->material;
     r.light = v->light;

@@ -180,18 +180,17 @@ Vec3 cosine_around(Vec3 n, std::mt19937& rng) {
     return b1 * (r * std::cos(phi)) + b2 * (r * std::sin(phi)) + n * z;
 }
 
-// Host copy of cl/ray.h offset_ray_origin (Wächter and Binder 2019).
+// Host copy of cl/ray.h offset_ray_origin, for a point interpolated from a triangle's corners:
+// its error off the plane is bounded by gamma(8) |p| along the normal here (generous; the
+// kernels bound it from the corners, cl/lights.h triangle_point_error).
 Vec3 offset_origin(Vec3 p, Vec3 ng, Vec3 w) {
-    Vec3 n = dot(ng, w) < 0 ? ng * -1.0f : ng;
-    Vec3 out;
+    const float gamma8 = 8 * 0x1p-24f / (1 - 8 * 0x1p-24f);
+    float error = gamma8 * (std::fabs(ng.x * p.x) + std::fabs(ng.y * p.y) + std::fabs(ng.z * p.z));
+    Vec3 offset = ng * (dot(ng, w) < 0 ? -error : error);
+    Vec3 out = p + offset;
     for (int k = 0; k < 3; ++k) {
-        int of = int(256.0f * n[k]);
-        int bits;
-        std::memcpy(&bits, &p[k], 4);
-        bits += p[k] < 0 ? -of : of;
-        float pi;
-        std::memcpy(&pi, &bits, 4);
-        out[k] = std::fabs(p[k]) < 1.0f / 32.0f ? p[k] + n[k] / 65536.0f : pi;
+        if (offset[k] > 0) out[k] = std::nextafter(out[k], INFINITY);
+        if (offset[k] < 0) out[k] = std::nextafter(out[k], -INFINITY);
     }
     return out;
 }
