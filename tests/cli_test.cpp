@@ -105,11 +105,37 @@ TEST_F(CliTest, RenderWritesImageAndStats) {
         EXPECT_TRUE(j.contains(key)) << key;
     EXPECT_EQ(j["spp"], 2);
     EXPECT_EQ(j["samples"], 2 * 24 * 16);
+    EXPECT_EQ(j["dropped_samples"], 0);
     EXPECT_GT(j["rays_per_second"].get<double>(), 0.0);
     EXPECT_GT(j["triangles"].get<int>(), 0);
     // The one-line summary names samples/s and rays/s.
     EXPECT_NE(r.output.find("samples/s"), std::string::npos) << r.output;
     EXPECT_NE(r.output.find("rays/s"), std::string::npos) << r.output;
+}
+
+// A sample with a non-finite value (injected: pixel (12, 8)'s sample 0 gets a NaN) does not
+// abort a render: it is left out, the image of the rest is written (finite), the stats name it,
+// and the exit status is 1 with one error line saying how many and where.
+TEST_F(CliTest, NonFiniteSampleIsDroppedNotFatal) {
+    CommandResult r = run("render " + data("materials.obj") + " --integrator bdpt --spp 4 --width 24 --height 16 -o " +
+                          out("a.exr") + " --stats " + out("s.json") + " --debug-nan-pixel 204");
+    EXPECT_EQ(r.status, 1) << r.output;
+    EXPECT_NE(r.output.find("clbdpt: error: 1 of 1536 samples had a non-finite value"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("pixel (12, 8) sample 0 strategy s="), std::string::npos) << r.output;
+    int w = 0, h = 0;
+    std::vector<float> rgb = clbdpt::read_image_rgb(out("a.exr"), &w, &h);
+    ASSERT_EQ(size_t(w) * h * 3, rgb.size());
+    for (float v : rgb) ASSERT_TRUE(std::isfinite(v));
+    // Three samples remain at that pixel: it is not black.
+    const float* p = &rgb[(8 * size_t(w) + 12) * 3];
+    EXPECT_GT(p[0] + p[1] + p[2], 0.0f);
+    std::ifstream in(out("s.json"));
+    nlohmann::json j = nlohmann::json::parse(in);
+    EXPECT_EQ(j["dropped_samples"], 1);
+    ASSERT_EQ(j["first_dropped_samples"].size(), 1u);
+    EXPECT_EQ(j["first_dropped_samples"][0]["pixel"], nlohmann::json({12, 8}));
+    EXPECT_EQ(j["first_dropped_samples"][0]["sample"], 0);
+    EXPECT_GE(j["first_dropped_samples"][0]["t"].get<int>(), 1);
 }
 
 // What real exporters write routinely (a missing MTL, slivers) renders, with one warning line

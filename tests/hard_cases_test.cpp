@@ -493,6 +493,43 @@ TEST(HardCases, OnlyEmitterHasZeroAreaRendersBlack) {
     }
 }
 
+// ---- A bad sample ---------------------------------------------------------------------------
+
+// A non-finite sample (injected at one pixel's sample 0) fails a render by default, so every
+// test here fails on one, naming the pixel and the strategy; with drop_non_finite (the command
+// line) that sample alone is left out and counted, and the image stays finite.
+TEST(HardCases, NonFiniteSampleThrowsOrIsDropped) {
+    DeviceScene scene = build_device_scene(room_scene(0.5f), kFilm, kFilm);
+    const int pixel = (kFilm / 2) * kFilm + kFilm / 2;
+    RenderOptions options = make_options(Integrator::Bdpt, kDepth, 171);
+    options.debug_nan_pixel = pixel;
+    {
+        Renderer renderer(test_device(), scene, options);
+        Film film(kFilm, kFilm);
+        try {
+            renderer.render_passes(film, 0, 2);
+            ADD_FAILURE() << "a NaN sample did not fail the render";
+        } catch (const Error& e) {
+            EXPECT_NE(std::string(e.what()).find("non-finite radiance at pixel (16, 16) sample 0 from strategy s="),
+                      std::string::npos)
+                << e.what();
+        }
+    }
+    options.drop_non_finite = true;
+    Renderer renderer(test_device(), scene, options);
+    Film film(kFilm, kFilm);
+    ASSERT_NO_THROW(renderer.render_passes(film, 0, 2));
+    EXPECT_EQ(renderer.stats().dropped_samples, 1u);
+    ASSERT_EQ(renderer.stats().first_dropped.size(), 1u);
+    const DroppedSample& d = renderer.stats().first_dropped[0];
+    EXPECT_EQ(d.x, kFilm / 2);
+    EXPECT_EQ(d.y, kFilm / 2);
+    EXPECT_EQ(d.sample, 0u);
+    EXPECT_GE(d.t, 1);
+    EXPECT_GE(d.s, 0);
+    for (float v : film.image()) ASSERT_TRUE(std::isfinite(v));
+}
+
 // ---- Long paths ---------------------------------------------------------------------------
 
 // A closed box whose floor, ceiling and back wall are 0.95 mirrors and whose other walls are

@@ -5,7 +5,12 @@
  * which the host adds in slot order, so the image does not depend on the order the items ran.
  *
  * Specialised per scene by -D flags (host/render/features.cpp): MAX_DEPTH, INTEGRATOR and
- * HAS_* for the light, material and camera features present. */
+ * HAS_* for the light, material and camera features present.
+ *
+ * A contribution that is not finite is a bug; the item then reports the first strategy that
+ * gave one, as camera_out.w = -1 - (s * STRATEGY_STRIDE + t) instead of its ray count, and the
+ * host drops the whole sample (host/render/renderer.cpp). DEBUG_NAN_PIXEL (tests only) makes
+ * that pixel's sample 0 give one. */
 #include "connect.h"
 #include "walk.h"
 
@@ -80,6 +85,7 @@ __kernel void render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, __global float
 #endif
 
     float3 L = (float3)(0.0f);
+    int bad_strategy = -1;
     for (int t = 1; t <= n_camera; ++t) {
         /* s = 1 with t >= 2 samples its own light point: it needs no light subpath. */
         for (int s = 0; s <= max(n_light, 1); ++s) {
@@ -94,6 +100,11 @@ __kernel void render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, __global float
             /* Divided by the strategy's samples per pixel sample (its light subpath may be
              * traced for only a fraction of the samples). */
             float3 c = unweighted * (weight / strategy_sample_count(&mix, s, t));
+#ifdef DEBUG_NAN_PIXEL
+            if (pixel == DEBUG_NAN_PIXEL && params.sample_index == 0) c = (float3)(NAN);
+#endif
+            if (bad_strategy < 0 && !(isfinite(c.x) && isfinite(c.y) && isfinite(c.z)))
+                bad_strategy = s * STRATEGY_STRIDE + t;
             int target = pixel;
             if (t == 1) {
                 int sx = min((int)splat_raster.x, params.width - 1);
@@ -121,5 +132,5 @@ __kernel void render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, __global float
 #endif
         }
     }
-    camera_out[gid] = (float4)(L.x, L.y, L.z, (float)rays_traced);
+    camera_out[gid] = (float4)(L.x, L.y, L.z, bad_strategy < 0 ? (float)rays_traced : -1.0f - (float)bad_strategy);
 }

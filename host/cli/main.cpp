@@ -55,6 +55,7 @@ struct RenderArgs {
     std::vector<float> eye, target, up;
     float fov = 0;
     bool no_default_light = false;
+    int debug_nan_pixel = -1;  // hidden: tests of the dropped-sample path
 };
 
 // Applies the command line's camera overrides. Where the scene's camera was automatic and only
@@ -255,6 +256,10 @@ int run_render(const RenderArgs& args) {
     options.time_budget = args.time_budget;
     options.max_depth = args.max_depth >= 0 ? args.max_depth : scene.render.max_depth;
     options.seed = args.seed >= 0 ? uint32_t(args.seed) : scene.render.seed;
+    // A non-finite sample is a bug, but an hours-long render must not die of one: it is left
+    // out, counted, and reported at the end (with exit status 1).
+    options.drop_non_finite = true;
+    options.debug_nan_pixel = args.debug_nan_pixel;
     options.all_features = args.all_features;
     options.local_size = args.local_size;
     if (!args.strategy_images.empty())
@@ -397,6 +402,10 @@ int run_render(const RenderArgs& args) {
         j["samples_per_second"] = sps;
         j["rays"] = st.rays;
         j["rays_per_second"] = rps;
+        j["dropped_samples"] = st.dropped_samples;
+        for (const DroppedSample& d : st.first_dropped)
+            j["first_dropped_samples"].push_back(
+                {{"pixel", {d.x, d.y}}, {"sample", d.sample}, {"s", d.s}, {"t", d.t}});
         j["kernel_build_seconds"] = st.build_seconds;
         j["kernel_from_cache"] = st.program_from_cache;
         j["kernel_defines"] = st.defines;
@@ -436,6 +445,21 @@ int run_render(const RenderArgs& args) {
                  strategy_mix.c_str(), film.spp, width, height, st.seconds, sps * 1e-6, rps * 1e-6,
                  st.program_from_cache ? "cached" : "build", st.build_seconds, output.c_str());
     if (!mix_note.empty()) std::fprintf(stderr, "clbdpt: strategy mix %s\n", mix_note.c_str());
+    if (st.dropped_samples > 0) {
+        std::string first;
+        for (const DroppedSample& d : st.first_dropped) {
+            first += first.empty() ? "" : "; ";
+            first += "pixel (" + std::to_string(d.x) + ", " + std::to_string(d.y) + ") sample " +
+                     std::to_string(d.sample);
+            if (d.s >= 0) first += " strategy s=" + std::to_string(d.s) + " t=" + std::to_string(d.t);
+        }
+        std::fprintf(stderr,
+                     "clbdpt: error: %llu of %llu samples had a non-finite value and were left out of %s (a bug: "
+                     "please report it with the scene; first: %s)\n",
+                     static_cast<unsigned long long>(st.dropped_samples), static_cast<unsigned long long>(st.samples),
+                     output.c_str(), first.c_str());
+        return 1;
+    }
     return 0;
 }
 
@@ -503,6 +527,8 @@ int main(int argc, char** argv) {
     render->add_flag("--no-default-light", args.no_default_light,
                      "Do not light a scene without lights by a uniform white environment");
     render->add_flag("-v,--verbose", args.verbose, "Print device, BVH and kernel flags");
+    // Tests only (no group: not in --help): that pixel's sample 0 gets a NaN contribution.
+    render->add_option("--debug-nan-pixel", args.debug_nan_pixel)->group("");
 
     try {
         app.parse(argc, argv);

@@ -75,6 +75,7 @@ Renderer::Renderer(DeviceContext& device, const DeviceScene& scene, const Render
             stats_.defines.push_back("STRATEGY_IMAGES_UNWEIGHTED");
         strategy_slots_ = (options.max_depth + 2) * (options.max_depth + 3);
     }
+    if (options.debug_nan_pixel >= 0) stats_.defines.push_back("DEBUG_NAN_PIXEL=" + std::to_string(options.debug_nan_pixel));
     const ProgramBuild& build = device.program("kernels/render.cl", stats_.defines);
     stats_.build_seconds = build.seconds;
     stats_.program_from_cache = build.from_cache;
@@ -124,6 +125,8 @@ void Renderer::reset_counters() {
     stats_.rays = 0;
     stats_.profile = RenderProfile();
     stats_.build_seconds = 0;
+    stats_.dropped_samples = 0;
+    stats_.first_dropped.clear();
 }
 
 void Renderer::set_strategy_mix(float light_subpaths, bool inner_connections) {
@@ -185,29 +188,50 @@ void Renderer::run_batch(Film& film, const PassSpec& pass, int first_item, int i
     }
     const auto accumulate_start = std::chrono::steady_clock::now();
     const int width = params.width;
+    std::vector<bool> dropped(size_t(item_count), false);
     for (int i = 0; i < item_count; ++i) {
         const cl_float4& c = camera_host_[i];
+        const SplatRecord* splats = &splats_host_[size_t(i) * splat_slots_];
+        // A sample with any non-finite value: the kernel names the first strategy that gave
+        // one in w (cl/kernels/render.cl); a sum that overflowed is caught here as well.
+        bool finite = c.s[3] >= 0 && std::isfinite(c.s[0]) && std::isfinite(c.s[1]) && std::isfinite(c.s[2]);
+        for (int k = 0; k < splat_slots_ && finite; ++k)
+            finite = splats[k].pixel < 0 || (std::isfinite(splats[k].r) && std::isfinite(splats[k].g) &&
+                                             std::isfinite(splats[k].b));
         const int pixel = render_item_pixel(first_item + i, width, pass.pixel_stride);
-        if (!std::isfinite(c.s[0]) || !std::isfinite(c.s[1]) || !std::isfinite(c.s[2]))
-            throw Error("non-finite radiance at pixel (" + std::to_string(pixel % width) + ", " +
-                        std::to_string(pixel / width) + ") sample " + std::to_string(pass.sample_index) +
-                        " (a bug: please report it with the scene)");
+        if (!finite) {
+            DroppedSample d;
+            d.x = pixel % width;
+            d.y = pixel / width;
+            d.sample = pass.sample_index;
+            if (c.s[3] < 0) {
+                const int strategy = int(-1.0f - c.s[3]), stride = options_.max_depth + 3;
+                d.s = strategy / stride;
+                d.t = strategy % stride;
+            }
+            if (!options_.drop_non_finite)
+                throw Error("non-finite radiance at pixel (" + std::to_string(d.x) + ", " + std::to_string(d.y) +
+                            ") sample " + std::to_string(d.sample) +
+                            (d.s >= 0 ? " from strategy s=" + std::to_string(d.s) + " t=" + std::to_string(d.t) : "") +
+                            " (a bug: please report it with the scene)");
+            ++stats_.dropped_samples;
+            if (stats_.first_dropped.size() < RenderStats::kFirstDropped) stats_.first_dropped.push_back(d);
+            dropped[size_t(i)] = true;
+            continue;
+        }
         double* dst = &film.camera_sum[size_t(pixel) * 3];
         dst[0] += c.s[0];
         dst[1] += c.s[1];
         dst[2] += c.s[2];
         stats_.rays += uint64_t(c.s[3]);
-    }
-    for (size_t k = 0; k < size_t(item_count) * splat_slots_; ++k) {
-        const SplatRecord& r = splats_host_[k];
-        if (r.pixel < 0) continue;
-        if (!std::isfinite(r.r) || !std::isfinite(r.g) || !std::isfinite(r.b))
-            throw Error("non-finite light-image splat at pixel index " + std::to_string(r.pixel) + " sample " +
-                        std::to_string(pass.sample_index) + " (a bug: please report it with the scene)");
-        double* dst = &film.light_sum[size_t(r.pixel) * 3];
-        dst[0] += r.r;
-        dst[1] += r.g;
-        dst[2] += r.b;
+        for (int k = 0; k < splat_slots_; ++k) {
+            const SplatRecord& r = splats[k];
+            if (r.pixel < 0) continue;
+            double* light = &film.light_sum[size_t(r.pixel) * 3];
+            light[0] += r.r;
+            light[1] += r.g;
+            light[2] += r.b;
+        }
     }
     if (strategy_slots_ > 0) {
         const size_t pixels = size_t(film.width) * film.height;
@@ -217,7 +241,7 @@ void Renderer::run_batch(Film& film, const PassSpec& pass, int first_item, int i
         }
         for (size_t k = 0; k < size_t(item_count) * strategy_slots_; ++k) {
             const SplatRecord& r = strategy_host_[k];
-            if (r.pixel < 0) continue;
+            if (r.pixel < 0 || dropped[k / size_t(strategy_slots_)]) continue;
             double* dst = &film.strategy_sum[((k % strategy_slots_) * pixels + size_t(r.pixel)) * 3];
             dst[0] += r.r;
             dst[1] += r.g;

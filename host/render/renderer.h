@@ -33,6 +33,12 @@ struct RenderOptions {
     int local_size = 0;         // work-group size; 0 = automatic (small on CPUs, the driver's choice elsewhere)
     enum class StrategyImages { Off, Weighted, Unweighted };
     StrategyImages strategy_images = StrategyImages::Off;  // also record each (s, t) apart
+    // A sample with a non-finite value (a bug) throws clbdpt::Error by default, so tests fail on
+    // it; with drop_non_finite the sample (its pixel value and its splats) is left out and
+    // counted in RenderStats instead, so a long render survives it (the command line).
+    bool drop_non_finite = false;
+    // Tests only: pixel whose sample 0 gets a NaN contribution (-1: none).
+    int debug_nan_pixel = -1;
     // Called now and then from the rendering thread: passes done, passes planned (0 if
     // time-bound), seconds so far.
     std::function<void(int, int, double)> progress;
@@ -65,6 +71,14 @@ struct RenderProfile {
     double accumulate_seconds = 0;
 };
 
+// A sample dropped for a non-finite value: its pixel, sample index and the first strategy
+// (s, t) that gave one (-1, -1 if the kernel did not name one).
+struct DroppedSample {
+    int x = 0, y = 0;
+    uint32_t sample = 0;
+    int s = -1, t = -1;
+};
+
 struct RenderStats {
     double seconds = 0;           // wall time of the passes (excluding the kernel build)
     double first_pass_seconds = 0; // wall time until the first pass was done
@@ -75,12 +89,18 @@ struct RenderStats {
         profile.accumulate_seconds += other.profile.accumulate_seconds;
         samples += other.samples;
         rays += other.rays;
+        dropped_samples += other.dropped_samples;
+        for (const DroppedSample& d : other.first_dropped)
+            if (first_dropped.size() < kFirstDropped) first_dropped.push_back(d);
         build_seconds += other.build_seconds;
     }
     double build_seconds = 0;     // kernel build or cache load
     bool program_from_cache = false;
     uint64_t samples = 0;         // pixel samples (one camera + one light subpath each)
     uint64_t rays = 0;            // closest-hit and shadow rays traced
+    uint64_t dropped_samples = 0; // samples left out for a non-finite value (drop_non_finite)
+    static constexpr size_t kFirstDropped = 5;
+    std::vector<DroppedSample> first_dropped;  // the first few of them
     std::vector<std::string> defines;
 };
 
@@ -111,7 +131,8 @@ public:
     void render_pass(Film& film, const PassSpec& pass);
 
     const RenderStats& stats() const { return stats_; }
-    // Zeroes samples, rays, profile and build time (the kernel flags and cache flag stay).
+    // Zeroes samples, rays, dropped samples, profile and build time (the kernel flags and cache
+    // flag stay).
     void reset_counters();
     const DeviceContext& device() const { return device_; }
     const DeviceScene& scene() const { return scene_; }
