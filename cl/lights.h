@@ -74,13 +74,18 @@ inline float3 area_light_le(const SceneData* scene, __global const Light* light,
 
 /* ---- Spot falloff ---------------------------------------------------------------------- */
 
+/* Whether unit direction w (away from the light) is inside the spot's cone. */
+inline int spot_contains(__global const Light* light, float3 w) {
+    return one_minus_cos_between(w, xyz(light->direction)) <= light->one_minus_cos_total;
+}
+
 /* pbrt-v3 SpotLight::Falloff: 1 inside the inner cone, 0 outside the outer one, a quartic ramp
- * between. w is the unit direction away from the light. */
+ * in cos between; in terms of 1 - cos, which keeps a cone of any width apart from its axis. */
 inline float spot_falloff(__global const Light* light, float3 w) {
-    float cos_theta = dot(w, xyz(light->direction));
-    if (cos_theta < light->cos_total_width) return 0.0f;
-    if (cos_theta >= light->cos_falloff_start) return 1.0f;
-    float delta = (cos_theta - light->cos_total_width) / (light->cos_falloff_start - light->cos_total_width);
+    float v = one_minus_cos_between(w, xyz(light->direction));
+    if (v > light->one_minus_cos_total) return 0.0f;
+    if (v <= light->one_minus_cos_falloff) return 1.0f;
+    float delta = (light->one_minus_cos_total - v) / (light->one_minus_cos_total - light->one_minus_cos_falloff);
     return (delta * delta) * (delta * delta);
 }
 
@@ -291,10 +296,10 @@ inline int light_sample_le(const SceneData* scene, int index, float2 u_pos, floa
     case LIGHT_SPOT: {
         er->origin = xyz(light->position);
         Frame f = frame_from_normal(xyz(light->direction));
-        er->dir = from_local(&f, sample_uniform_cone(u_dir, light->cos_total_width));
+        er->dir = from_local(&f, sample_uniform_cone(u_dir, light->one_minus_cos_total));
         er->n = er->dir;
         er->pdf_pos = 1.0f;
-        er->pdf_dir = uniform_cone_pdf(light->cos_total_width);
+        er->pdf_dir = uniform_cone_pdf(light->one_minus_cos_total);
         er->le = xyz(light->emission) * spot_falloff(light, er->dir);
         break;
     }
@@ -346,7 +351,7 @@ inline void light_pdf_le(const SceneData* scene, int index, float3 n, float3 dir
         *pdf_dir = INV_4PI_F;
         break;
     case LIGHT_SPOT:
-        *pdf_dir = dot(dir, xyz(light->direction)) >= light->cos_total_width ? uniform_cone_pdf(light->cos_total_width) : 0.0f;
+        *pdf_dir = spot_contains(light, dir) ? uniform_cone_pdf(light->one_minus_cos_total) : 0.0f;
         break;
     case LIGHT_DIRECTIONAL: {
         float r = scene_radius(scene);

@@ -35,15 +35,24 @@ inline float3 sample_uniform_sphere(float2 u) {
     return (float3)(r * cs.x, r * cs.y, z);
 }
 
-/* Uniform direction inside a cone about +z with the given cosine of its half angle. */
-inline float3 sample_uniform_cone(float2 u, float cos_max) {
-    float cos_theta = (1.0f - u.x) + u.x * cos_max;
-    float sin_theta = sqrt(fmax(0.0f, 1.0f - cos_theta * cos_theta));
+/* Uniform direction inside a cone about +z whose half angle has 1 - cos = one_minus_cos_max (in
+ * (0, 2]). Drawn as 1 - cos, and sin from it as sqrt(v (2 - v)): for a cone of a hundredth of a
+ * degree cos rounds to 1 in float, but sin, and so the direction, stay accurate. */
+inline float3 sample_uniform_cone(float2 u, float one_minus_cos_max) {
+    float v = u.x * one_minus_cos_max;
+    float sin_theta = sqrt(fmax(0.0f, v * (2.0f - v)));
     float2 cs = unit_circle(u.y * 2.0f * PI_F);
-    return (float3)(cs.x * sin_theta, cs.y * sin_theta, cos_theta);
+    return (float3)(cs.x * sin_theta, cs.y * sin_theta, 1.0f - v);
 }
 
-inline float uniform_cone_pdf(float cos_max) { return 1.0f / (2.0f * PI_F * (1.0f - cos_max)); }
+inline float uniform_cone_pdf(float one_minus_cos_max) { return 1.0f / (2.0f * PI_F * one_minus_cos_max); }
+
+/* 1 - cos of the angle between unit vectors w and axis, accurate for small angles as well
+ * (|w x axis|^2 / (1 + cos) there, rather than 1 - cos, which cancels to 0 below ~3e-4 rad). */
+inline float one_minus_cos_between(float3 w, float3 axis) {
+    float c = dot(w, axis);
+    return c > 0.5f ? length_squared(cross(w, axis)) / (1.0f + c) : 1.0f - c;
+}
 
 /* Uniform point on a triangle as barycentrics (b0, b1); b2 = 1 - b0 - b1. */
 inline float2 sample_uniform_triangle(float2 u) {

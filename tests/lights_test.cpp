@@ -89,7 +89,7 @@ double triangle_solid_angle(D3 r, D3 a, D3 b, D3 c) {
 
 double spot_falloff(const Light& l, D3 w_from_light) {
     double c = dot(w_from_light, d3(l.direction));
-    double total = l.cos_total_width, start = l.cos_falloff_start;
+    double total = 1 - double(l.one_minus_cos_total), start = 1 - double(l.one_minus_cos_falloff);
     if (c < total) return 0;
     if (c >= start) return 1;
     double d = (c - total) / (start - total);
@@ -498,9 +498,9 @@ TEST(Lights, SpotSampleLe) {
     const TestScene& scene = map_scene();
     const Light& spot = scene.ds.lights[kSpot];
     const size_t n = 1 << 17;
-    const double cos_total = spot.cos_total_width;
+    const double cos_total = 1 - double(spot.one_minus_cos_total);
     EXPECT_NEAR(cos_total, std::cos(kSpotCone * kPi / 180), 1e-6);
-    EXPECT_NEAR(spot.cos_falloff_start, std::cos((kSpotCone - kSpotDelta) * kPi / 180), 1e-6);
+    EXPECT_NEAR(1 - double(spot.one_minus_cos_falloff), std::cos((kSpotCone - kSpotDelta) * kPi / 180), 1e-6);
     DFrame f(d3(spot.direction));
     std::vector<LeSample> s = sample_le(scene, kSpot, n, 53);
     std::vector<double> obs(kRadial * kAngular, 0.0);

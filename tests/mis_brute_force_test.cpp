@@ -271,8 +271,8 @@ Densities densities(const Reference& ref, const Path& path) {
         break;
     case LIGHT_SPOT:
         d.light[n - 1] = L.select_pdf;
-        d.light[n - 2] = to_area(dot(-w_light, d3(L.direction)) >= L.cos_total_width
-                                     ? 1 / (2 * kPi * (1 - double(L.cos_total_width)))
+        d.light[n - 2] = to_area(dot(-w_light, d3(L.direction)) >= 1 - double(L.one_minus_cos_total)
+                                     ? 1 / (2 * kPi * double(L.one_minus_cos_total))
                                      : 0.0,
                                  lv, x[n - 2], false);
         break;
@@ -529,7 +529,7 @@ struct PathGenerator {
         case LIGHT_POINT: lv.p = d3(L.position); break;
         case LIGHT_SPOT:
             lv.p = d3(L.position);
-            if (dot(dir(lv, last), d3(L.direction)) < double(L.cos_total_width) + 0.01) return false;
+            if (dot(dir(lv, last), d3(L.direction)) < 1 - double(L.one_minus_cos_total) + 0.01) return false;
             break;
         case LIGHT_DIRECTIONAL: lv.p = round(last.p - d3(L.direction) * (2 * r)); break;
         case LIGHT_ENVIRONMENT: {

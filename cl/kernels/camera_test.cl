@@ -52,7 +52,7 @@ __kernel void camera_normalisation_test(Camera camera, float cos_max, uint seed,
     int gid = get_global_id(0);
     Rng rng = rng_init((uint)gid, 0u, seed);
     float2 u_dir = rng_next2(&rng), u_lens = rng_next2(&rng);
-    float3 dir = normalize(camera_to_world_dir(&camera, sample_uniform_cone(u_dir, cos_max)));
+    float3 dir = normalize(camera_to_world_dir(&camera, sample_uniform_cone(u_dir, 1.0f - cos_max)));
     float3 lens = xyz(camera.eye);
 #ifdef HAS_THIN_LENS
     float2 l = camera.lens_radius * sample_concentric_disk(u_lens);
@@ -62,7 +62,7 @@ __kernel void camera_normalisation_test(Camera camera, float cos_max, uint seed,
     float we = camera_we(&camera, lens, dir, &raster);
     float pdf_pos, pdf_dir;
     camera_pdf_we(&camera, lens, dir, &pdf_pos, &pdf_dir);
-    float inv_p = 1.0f / uniform_cone_pdf(cos_max);
+    float inv_p = 1.0f / uniform_cone_pdf(1.0f - cos_max);
     float cos_theta = dot(dir, xyz(camera.forward));
     out[gid] = (float4)(we * cos_theta * camera.lens_area * inv_p, pdf_dir * inv_p, raster);
 }

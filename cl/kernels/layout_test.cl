@@ -20,7 +20,7 @@
         F(Material, cutout_channel) F(Material, bump_texture) F(Material, bump_is_normal_map)     \
         F(Material, bump_scale)                                                                   \
     S(Light) F(Light, position) F(Light, direction) F(Light, emission) F(Light, kind)             \
-        F(Light, triangle) F(Light, cos_total_width) F(Light, cos_falloff_start) F(Light, area)   \
+        F(Light, triangle) F(Light, one_minus_cos_total) F(Light, one_minus_cos_falloff) F(Light, area)   \
         F(Light, select_pdf) F(Light, power) F(Light, pad0)                                       \
     S(Camera) F(Camera, eye) F(Camera, right) F(Camera, up) F(Camera, forward)                    \
         F(Camera, tan_half_width) F(Camera, tan_half_height) F(Camera, lens_radius)               \

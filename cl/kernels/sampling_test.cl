@@ -24,7 +24,7 @@ __kernel void warp_test(int warp, float cos_max, uint seed, __global float4* out
         break;
     }
     case WARP_UNIFORM_SPHERE: r = (float4)(sample_uniform_sphere(u), INV_4PI_F); break;
-    case WARP_UNIFORM_CONE: r = (float4)(sample_uniform_cone(u, cos_max), uniform_cone_pdf(cos_max)); break;
+    case WARP_UNIFORM_CONE: r = (float4)(sample_uniform_cone(u, 1.0f - cos_max), uniform_cone_pdf(1.0f - cos_max)); break;
     case WARP_UNIFORM_TRIANGLE: r.xy = sample_uniform_triangle(u); break;
     }
     out[gid] = r;

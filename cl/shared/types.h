@@ -122,8 +122,10 @@ typedef struct {
                                 environment: radiance (scale of the map if there is one) */
     clbdpt_int kind;         /* LIGHT_* */
     clbdpt_int triangle;     /* area: triangle index (BVH order) */
-    float cos_total_width;   /* spot: cosine of the cone's half angle */
-    float cos_falloff_start; /* spot: cosine where the falloff starts */
+    /* spot: 1 - cos of the cone's half angle, and of the angle where the falloff starts (kept as
+     * 1 - cos, not cos: a cone of 0.01 degrees has cos = 1 - 1.5e-8, which is 1 in float) */
+    float one_minus_cos_total;
+    float one_minus_cos_falloff;
     float area;              /* area: triangle area */
     float select_pdf;        /* probability that light selection picks this light */
     float power;             /* luminance of emitted power, the selection weight */

@@ -190,9 +190,19 @@ DeviceScene build_device_scene(const Scene& scene, int width, int height) {
             if (!(length(axis) > 0)) throw Error(scene.path + ": spot light 'target' equals its 'position'");
             l.direction = float4_of(normalize(axis));
             l.emission = float4_of(desc.color);
-            l.cos_total_width = std::cos(desc.cone_angle * kPi / 180.0f);
-            l.cos_falloff_start = std::cos((desc.cone_angle - desc.cone_delta) * kPi / 180.0f);
-            power = 2.0f * kPi * (1.0f - 0.5f * (l.cos_falloff_start + l.cos_total_width)) * luminance(desc.color);
+            // 1 - cos = 2 sin^2(angle / 2), in double: exact for a cone of any width.
+            auto one_minus_cos = [](double degrees) {
+                const double s = std::sin(0.5 * degrees * 3.14159265358979323846 / 180.0);
+                return 2.0 * s * s;
+            };
+            l.one_minus_cos_total = float(one_minus_cos(desc.cone_angle));
+            l.one_minus_cos_falloff = float(one_minus_cos(desc.cone_angle - desc.cone_delta));
+            if (!(l.one_minus_cos_total > 0.0f))
+                throw Error(scene.path + ": spot light cone of " + std::to_string(desc.cone_angle) +
+                            " degrees is too narrow to represent");
+            // pbrt-v3: 2 pi (1 - (cos_falloff + cos_total) / 2).
+            power = float(3.14159265358979323846 * (double(l.one_minus_cos_falloff) + l.one_minus_cos_total)) *
+                    luminance(desc.color);
             break;
         }
         case LightDesc::Kind::Directional:
