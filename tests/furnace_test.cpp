@@ -116,5 +116,90 @@ INSTANTIATE_TEST_SUITE_P(Integrators, BoxFurnaceTest, ::testing::Values(Integrat
                              return std::string(integrator_name(info.param));
                          });
 
+// ---- Glossy furnace -----------------------------------------------------------------------
+
+// The furnace sphere made of a lossless conductor: the glossy material with ks = 1, kd = 0 and
+// alpha 0.3 (GGX, no Fresnel: reflectance 1), emitting Le inside. Single-scattering GGX loses
+// the energy of light that would scatter between microfacets, more at grazing angles, so the
+// field is no longer uniform: a path of k bounces carries between Le E_min^k and Le E_max^k,
+// where E(mu) is the lobe's directional albedo (integrated on the host below, in double). Every
+// pixel lies between Le sum E_min^k and Le sum E_max^k, and bdpt, pt and lt agree.
+constexpr float kGlossyAlpha = 0.3f;
+
+// Directional albedo of the GGX lobe (D G / (4 cos_o cos_i), Smith G) for cos theta_o = mu,
+// by a midpoint rule over the hemisphere of wi (800 x 400 cells; the lobe is 0.3 rad wide).
+double ggx_albedo(double mu, double alpha) {
+    const double pi = 3.14159265358979323846;
+    auto lambda = [&](double c) {
+        double t2 = (1 - c * c) / (c * c);
+        return 0.5 * (-1 + std::sqrt(1 + alpha * alpha * t2));
+    };
+    const double so = std::sqrt(1 - mu * mu);
+    const int nt = 400, np = 800;
+    double sum = 0;
+    for (int i = 0; i < nt; ++i) {
+        const double theta = (i + 0.5) * (pi / 2) / nt, ci = std::cos(theta), si = std::sin(theta);
+        for (int j = 0; j < np; ++j) {
+            const double phi = (j + 0.5) * 2 * pi / np;
+            // wo = (so, 0, mu), wi = (si cos phi, si sin phi, ci); h = normalize(wo + wi).
+            double hx = so + si * std::cos(phi), hy = si * std::sin(phi), hz = mu + ci;
+            double hl = std::sqrt(hx * hx + hy * hy + hz * hz);
+            double ch = hz / hl, c2 = ch * ch, a2 = alpha * alpha;
+            double e = 1 + (1 - c2) / c2 / a2;
+            double d = 1 / (pi * a2 * c2 * c2 * e * e);
+            double g = 1 / (1 + lambda(mu) + lambda(ci));
+            sum += d * g / (4 * mu * ci) * ci * si;
+        }
+    }
+    return sum * (pi / 2 / nt) * (2 * pi / np);
+}
+
+TEST(GlossyFurnace, EveryPixelWithinTheLobesAlbedoBoundsAndIntegratorsAgree) {
+    const int depth = 3;
+    SceneBuilder b;
+    Material m = diffuse_material({0, 0, 0}, kLe);
+    m.kind = MATERIAL_GLOSSY;
+    m.ks = float4_of({1, 1, 1});
+    m.alpha = kGlossyAlpha;
+    int furnace = b.material(m, "conductor furnace");
+    b.sphere({0, 0, 0}, 1.0f, 2, /*inward=*/true, furnace);
+    b.camera({0.1f, -0.2f, 0.15f}, {0.2f, 0.1f, 1}, 90.0f);
+    const DeviceScene scene = build_device_scene(b.scene, kFilm, kFilm);
+    double albedo_lo = 1, albedo_hi = 0;
+    for (double mu = 0.02; mu <= 1.0; mu += 0.02) {
+        double e = ggx_albedo(mu, kGlossyAlpha);
+        albedo_lo = std::min(albedo_lo, e);
+        albedo_hi = std::max(albedo_hi, e);
+    }
+    // No albedo above 1 (the lobe conserves energy), and a real loss somewhere.
+    ASSERT_LE(albedo_hi, 1.0 + 1e-3);
+    ASSERT_LT(albedo_lo, 0.95);
+    auto series = [&](double e) {
+        double sum = 0, ek = 1;
+        for (int k = 0; k <= depth; ++k, ek *= e) sum += ek;
+        return sum * (kLe[0] + kLe[1] + kLe[2]) / 3.0;
+    };
+    const double lo = series(albedo_lo), hi = series(albedo_hi);
+    RegionStats bdpt;
+    for (Integrator integrator : {Integrator::Bdpt, Integrator::Pt, Integrator::Lt}) {
+        RenderOptions options = make_options(integrator, depth, 31 + uint32_t(integrator));
+        const std::string what = std::string("glossy ") + options_name(options);
+        RegionStats st = render_stats_or_fail(scene, options, scaled_passes(kPasses), kBlocks, what);
+        double worst = 0;
+        for (size_t r = 0; r <= st.mean.size(); ++r) {
+            bool image = r == st.mean.size();
+            double v = image ? st.image_mean : st.mean[r], se = image ? st.image_std_error : st.std_error[r];
+            double z = std::max({0.0, (lo - v) / se, (v - hi) / se});
+            if (!std::isfinite(z)) z = INFINITY;
+            worst = std::max(worst, z);
+            EXPECT_LE(z, kSigmas) << what << (image ? " image" : " region " + std::to_string(r)) << ": " << v
+                                  << " +- " << se << " outside [" << lo << ", " << hi << "]";
+        }
+        report_stat(what + " within albedo bounds", worst, kSigmas, worst <= kSigmas);
+        if (integrator == Integrator::Bdpt) bdpt = st;
+        else expect_agree(st, bdpt, kSigmas, what + " vs bdpt");
+    }
+}
+
 }  // namespace
 }  // namespace clbdpt::test
