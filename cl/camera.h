@@ -75,9 +75,9 @@ inline void camera_pdf_we(const Camera* c, float3 lens_point, float3 dir, float*
 }
 
 /* Sample_Wi: picks a lens point, returns We toward `ref`, the direction wi from ref to the lens,
- * the distance, the solid-angle pdf at ref, and the raster position. */
-inline float camera_sample_wi(const Camera* c, float3 ref, float2 u, float3* lens_point, float3* wi,
-                              float* dist, float* pdf_w, float2* raster) {
+ * the solid-angle pdf at ref, and the raster position. */
+inline float camera_sample_wi(const Camera* c, float3 ref, float2 u, float3* lens_point, float3* wi, float* pdf_w,
+                              float2* raster) {
     float3 lens_cam = (float3)(0.0f, 0.0f, 0.0f);
 #ifdef HAS_THIN_LENS
     float2 lens = c->lens_radius * sample_concentric_disk(u);
@@ -90,7 +90,6 @@ inline float camera_sample_wi(const Camera* c, float3 ref, float2 u, float3* len
     if (d2 == 0.0f) return 0.0f;
     float d = sqrt(d2);
     *wi = to_lens / d;
-    *dist = d;
     *lens_point = p_lens;
     float cos_lens = fabs(dot(xyz(c->forward), *wi));
     if (cos_lens == 0.0f) return 0.0f;

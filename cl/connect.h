@@ -32,8 +32,8 @@ inline float3 connect_bdpt(const SceneData* scene, const StrategyMix* mix, Rng* 
         float2 u = rng_next2(rng);
         if (!vertex_is_connectible(scene, qs)) return L;
         float3 lens_point, wi;
-        float dist, pdf_w;
-        float we = camera_sample_wi(&scene->camera, qs->p, u, &lens_point, &wi, &dist, &pdf_w, raster);
+        float pdf_w;
+        float we = camera_sample_wi(&scene->camera, qs->p, u, &lens_point, &wi, &pdf_w, raster);
         if (pdf_w > 0.0f && we > 0.0f) {
             /* The lens is no scene surface: nothing to offset its point from. */
             sampled = vertex_at(VERTEX_CAMERA, lens_point, xyz(scene->camera.forward), 0.0f);

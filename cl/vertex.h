@@ -198,16 +198,11 @@ inline float vertex_pdf_light(const SceneData* scene, const PathVertex* v, const
     if (d2 == 0.0f) return 0.0f;
     float inv_d2 = 1.0f / d2;
     w *= sqrt(inv_d2);
-    float pdf;
-    if (vertex_is_infinite_light(scene, v)) {
-        /* Emission from an infinite light starts on the scene's bounding disk (seed ch. 6). */
-        float r = scene_radius(scene);
-        pdf = 1.0f / (PI_F * r * r);
-    } else {
-        float pdf_pos, pdf_dir;
-        light_pdf_le(scene, v->light, v->ng, w, &pdf_pos, &pdf_dir);
-        pdf = pdf_dir * inv_d2;
-    }
+    float pdf_pos, pdf_dir;
+    light_pdf_le(scene, v->light, v->ng, w, &pdf_pos, &pdf_dir);
+    /* Emission from an infinite light starts on the scene's bounding disk (seed ch. 6): the
+     * disk's area density, carried along the parallel rays to `next`. */
+    float pdf = vertex_is_infinite_light(scene, v) ? pdf_pos : pdf_dir * inv_d2;
     if (vertex_on_surface(next)) pdf *= fabs(dot(next->ng, w));
     return pdf;
 }

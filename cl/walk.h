@@ -45,9 +45,10 @@ inline void surface_vertex_from_hit(const SceneData* scene, const PathVertex* pr
     v->light = info.light;
 }
 
-/* Extends a subpath: path[-1] is the vertex the ray (o, d) leaves, with throughput beta and
- * solid-angle density pdf_dir of d. Writes at most max_vertices vertices from path[0] on and
- * returns how many. Bounce k draws from first_draw + SAMPLE_DRAWS_PER_BOUNCE * k.
+/* Extends a subpath: path[start - 1] is the vertex the ray (o, d) leaves (the camera or the
+ * light vertex), with throughput beta and solid-angle density pdf_dir of d. Writes at most
+ * max_vertices vertices from path[start] on and returns how many; stops before tracing a ray
+ * whose throughput is black. Bounce k draws from first_draw + SAMPLE_DRAWS_PER_BOUNCE * k.
  *
  * Densities between surface vertices are evaluated from the vertex positions, exactly as every
  * MIS evaluation later does, not from the sampled direction: the ray leaves from an offset
@@ -55,17 +56,16 @@ inline void surface_vertex_from_hit(const SceneData* scene, const PathVertex* pr
  * and a near-specular glossy lobe's density changes by percents over that. With positions on
  * both sides the MIS weights of a path sum to 1 to float precision (tests/mis_test.cpp). */
 inline int random_walk(const SceneData* scene, Rng* rng, float3 o, float3 d, float3 beta, float pdf_dir,
-                       int max_vertices, int mode, uint first_draw, PathVertex* path) {
-    if (max_vertices == 0) return 0;
-    int bounces = 0;
+                       int max_vertices, int mode, uint first_draw, PathVertex* path, int start) {
+    const int end = start + max_vertices;
     float pdf_fwd = pdf_dir;
-    for (;;) {
+    int i = start;
+    while (i < end && !is_black(beta)) {
         Hit hit;
         int found = intersect(scene->nodes, scene->triangles, &scene->cutouts, o, d, INFINITY, &hit);
         ++*scene->rays_traced;
-        if (is_black(beta)) break;
-        PathVertex* vertex = &path[bounces];
-        PathVertex* prev = &path[bounces - 1];
+        PathVertex* vertex = &path[i];
+        PathVertex* prev = &path[i - 1];
         if (found) {
             surface_vertex_from_hit(scene, prev, &hit, vertex);
         } else {
@@ -81,17 +81,19 @@ inline int random_walk(const SceneData* scene, Rng* rng, float3 o, float3 d, flo
 #endif
         }
         vertex->beta = beta;
-        if (bounces > 0 && !prev->delta) {
+        /* A scattering predecessor: its forward density toward this vertex and its own
+         * predecessor's reverse density, both from the positions (see above). */
+        if (i > start && !prev->delta) {
             float3 w = normalize(vertex->p - prev->p);
             Bsdf prev_bsdf = vertex_bsdf(scene, prev);
             pdf_fwd = bsdf_pdf(&prev_bsdf, prev->wo, w);
-            path[bounces - 2].pdf_rev = convert_density(scene, prev, bsdf_pdf(&prev_bsdf, w, prev->wo), &path[bounces - 2]);
+            path[i - 2].pdf_rev = convert_density(scene, prev, bsdf_pdf(&prev_bsdf, w, prev->wo), &path[i - 2]);
         }
         vertex->pdf_fwd = convert_density(scene, prev, pdf_fwd, vertex);
-        ++bounces;
-        if (vertex->type == VERTEX_LIGHT || bounces >= max_vertices) break;
+        ++i;
+        if (vertex->type == VERTEX_LIGHT || i == end) break;
 
-        rng_seek(rng, first_draw + SAMPLE_DRAWS_PER_BOUNCE * (uint)(bounces - 1));
+        rng_seek(rng, first_draw + SAMPLE_DRAWS_PER_BOUNCE * (uint)(i - 1 - start));
         float u_lobe = rng_next(rng);
         float2 u_dir = rng_next2(rng);
         float3 u = (float3)(u_lobe, u_dir.x, u_dir.y);
@@ -110,7 +112,7 @@ inline int random_walk(const SceneData* scene, Rng* rng, float3 o, float3 d, flo
         o = offset_ray_origin(vertex->p, vertex->ng, vertex->p_error, bs.wi);
         d = bs.wi;
     }
-    return bounces;
+    return i - start;
 }
 
 /* Camera subpath through raster position `raster`: at most max_depth + 2 vertices (the camera,
@@ -127,7 +129,7 @@ inline int generate_camera_subpath(const SceneData* scene, Rng* rng, float2 rast
     cam->beta = (float3)(1.0f);
     if (pdf_dir == 0.0f) return 1;
     return random_walk(scene, rng, o, d, cam->beta, pdf_dir, max_depth + 1, TRANSPORT_RADIANCE,
-                       sample_draw_camera_bounce(0), path + 1) + 1;
+                       sample_draw_camera_bounce(0), path, 1) + 1;
 }
 
 /* Light subpath: at most max_depth + 1 vertices (the light and max_depth scattering vertices). */
@@ -159,7 +161,7 @@ inline int generate_light_subpath(const SceneData* scene, Rng* rng, int max_dept
     float3 beta = er.le * (fabs(dot(er.n, er.dir)) / (select_pdf * er.pdf_pos * er.pdf_dir));
     float3 o = offset_ray_origin(lv->p, lv->ng, lv->p_error, er.dir);
     int n = random_walk(scene, rng, o, er.dir, beta, er.pdf_dir, max_depth, TRANSPORT_IMPORTANCE,
-                        sample_draw_light_bounce(0), path + 1);
+                        sample_draw_light_bounce(0), path, 1);
     if (light_is_infinite(kind)) {
         /* Infinite lights: the first hit's density is that of the bounding disk, and the light
          * vertex's own density is the direction's (seed ch. 6). */

@@ -34,7 +34,6 @@ MisSums mis_sums(const Scene& scene, Integrator integrator, int max_depth, int s
         params.height = size;
         params.pixel_count = pixels;
         params.sample_index = uint32_t(pass);
-        params.max_depth = max_depth;
         params.light_subpaths = light_subpaths;
         params.inner_connections = inner_connections ? 1 : 0;
         kernel.setArg(SceneBuffers::kSceneArgCount, params);

@@ -23,7 +23,8 @@ __kernel void camera_roundtrip_test(Camera camera, __global const float4* in, __
     float dist = 0.0f, pdf_w = 0.0f;
     float2 raster = (float2)(-1.0f, -1.0f);
     float2 u_wi = depth[gid].yz;
-    float we = camera_sample_wi(&camera, p, u_wi, &lens, &wi, &dist, &pdf_w, &raster);
+    float we = camera_sample_wi(&camera, p, u_wi, &lens, &wi, &pdf_w, &raster);
+    dist = length(lens - p);
 
     float2 raster_we = (float2)(-1.0f, -1.0f);
     float we_eval = camera_we(&camera, lens, -wi, &raster_we);

@@ -21,7 +21,7 @@
         F(Material, bump_scale)                                                                   \
     S(Light) F(Light, position) F(Light, direction) F(Light, emission) F(Light, kind)             \
         F(Light, triangle) F(Light, one_minus_cos_total) F(Light, one_minus_cos_falloff) F(Light, area)   \
-        F(Light, select_pdf) F(Light, power) F(Light, pad0)                                       \
+        F(Light, select_pdf) F(Light, pad0) F(Light, pad1)                                        \
     S(Camera) F(Camera, eye) F(Camera, right) F(Camera, up) F(Camera, forward)                    \
         F(Camera, tan_half_width) F(Camera, tan_half_height) F(Camera, lens_radius)               \
         F(Camera, focus_distance) F(Camera, width) F(Camera, height) F(Camera, film_area)         \
@@ -32,11 +32,11 @@
         F(SceneInfo, pad1)                                                                        \
     S(RenderParams) F(RenderParams, width) F(RenderParams, height) F(RenderParams, first_pixel)   \
         F(RenderParams, pixel_count) F(RenderParams, sample_index) F(RenderParams, seed)          \
-        F(RenderParams, max_depth) F(RenderParams, light_subpaths)                                \
+        F(RenderParams, light_subpaths)                                \
         F(RenderParams, inner_connections) F(RenderParams, pixel_stride)                          \
         F(RenderParams, position_sample_index) F(RenderParams, position_seed)                     \
         F(RenderParams, zsobol_log2_spp) F(RenderParams, zsobol_base4_digits) F(RenderParams, pad0) \
-        F(RenderParams, pad1)                                                                     \
+        F(RenderParams, pad1) F(RenderParams, pad2)                                               \
     S(SplatRecord) F(SplatRecord, r) F(SplatRecord, g) F(SplatRecord, b) F(SplatRecord, pixel)
 
 #ifdef CLBDPT_DEVICE

@@ -127,9 +127,9 @@ typedef struct {
     float one_minus_cos_total;
     float one_minus_cos_falloff;
     float area;              /* area: triangle area */
-    float select_pdf;        /* probability that light selection picks this light */
-    float power;             /* luminance of emitted power, the selection weight */
-    clbdpt_int pad0;
+    float select_pdf;        /* probability that light selection picks this light, in
+                                proportion to its power (DeviceScene::light_power) */
+    clbdpt_int pad0, pad1;
 } Light;
 
 /* ---- Camera --------------------------------------------------------------------------- */
@@ -173,7 +173,6 @@ typedef struct {
     clbdpt_int pixel_count;  /* work items in this batch, one sample each */
     clbdpt_uint sample_index; /* which sample of every pixel this launch computes */
     clbdpt_uint seed;
-    clbdpt_int max_depth;    /* maximum number of scattering vertices on a path */
     /* The strategy mix (cl/strategies.h, StrategyMix): light subpaths traced per pixel sample
      * (0 .. 1; a fraction is a probability, stratified over a pixel's samples) and whether
      * subpaths are joined by connections with s >= 2 and t >= 2. */
@@ -191,7 +190,7 @@ typedef struct {
      * base-4 digits of the image-wide sample index. */
     clbdpt_int zsobol_log2_spp;
     clbdpt_int zsobol_base4_digits;
-    clbdpt_int pad0, pad1;
+    clbdpt_int pad0, pad1, pad2; /* the maximum depth is the kernel's MAX_DEPTH, not a parameter */
 } RenderParams;
 
 /* Work items of a pass with pixel_stride `stride` over a width x height film. */

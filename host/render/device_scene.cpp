@@ -233,9 +233,9 @@ DeviceScene build_device_scene(const Scene& scene, int width, int height) {
     }
     ds.light_cdf.assign(ds.lights.size() + 1, 0.0f);
     if (!ds.lights.empty()) {
+        ds.light_power = powers;
         float total = build_cdf(powers, ds.light_cdf.data());
         for (size_t i = 0; i < ds.lights.size(); ++i) {
-            ds.lights[i].power = powers[i];
             ds.lights[i].select_pdf = total > 0 ? powers[i] / total : 1.0f / float(ds.lights.size());
         }
     }

@@ -148,7 +148,6 @@ void Renderer::run_batch(Film& film, const PassSpec& pass, int first_item, int i
     params.position_seed = pass.position_seed;
     params.zsobol_log2_spp = zsobol_log2_spp_;
     params.zsobol_base4_digits = zsobol_base4_digits_;
-    params.max_depth = options_.max_depth;
     const bool bdpt = options_.integrator == Integrator::Bdpt;
     params.light_subpaths = bdpt ? options_.light_subpaths : 1.0f;
     params.inner_connections = bdpt ? (options_.inner_connections ? 1 : 0) : 1;
