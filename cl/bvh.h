@@ -113,9 +113,8 @@ __attribute__((always_inline)) inline bvh_intn bvh_hit_boxes(__global const BvhN
  * and sets *t and the barycentrics of p1 and p2. Hits whose t could be 0 or less through
  * rounding do not count; with below_tmax set, neither do those whose t could be tmax or more
  * (visibility between two points: the far point's own surface, just beyond tmax, must not
- * block). A ray through an edge or a vertex (an edge
- * function exactly 0) hits every triangle sharing it, which is what makes the test
- * watertight. */
+ * block). A ray through an edge or a vertex (an edge function exactly 0) hits every triangle
+ * sharing it, which is what makes the test watertight. */
 __attribute__((always_inline)) inline bool bvh_hit_triangle(__global const float* v, const BvhRay* r, float tmax,
                                                             bool below_tmax, float* t_out, float* b1_out,
                                                             float* b2_out) {

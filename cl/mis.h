@@ -21,8 +21,8 @@
  * strategies of the ratio share, so it counts as 1 (seed 5.4.2, remap0); the strategies that
  * would have to connect through the delta are excluded by the delta tests. Any other 0 is a
  * real density: a reverse density of 0 means this strategy, and every one further along on
- * the same side (their densities contain the same factor), cannot produce the path (a direction
- * across the shading normal's terminator band, a point outside a spot light's cone), so the
+ * the same side (their densities contain the same factor), cannot produce the path (a
+ * direction pair across a shading normal's terminator band: bsdf_pdf is 0 both ways), so the
  * side's sum ends there (returns 0). A forward density of 0 that is no convention means the
  * strategy that made the path could not have made it (float rounding on a grazing direction):
  * the ratio is taken as 0 as well, which keeps the weight finite. */

@@ -19,8 +19,7 @@ typedef struct {
 /* Ray origins off surfaces, after pbrt-v3 section 3.9.5: a point computed on a triangle carries
  * a bound `p_error` on its distance from the triangle's plane (measured along the normal, from
  * the rounding of the computation that produced it: triangle_point_error, a few ULPs of its
- * coordinates); a ray leaving it starts that far off the plane on the side it leaves toward,
- * rounded away from the surface. The true surface is then behind the origin, so the
+ * coordinates); a ray leaving it starts that far off the plane on the side it leaves toward. The true surface is then behind the origin, so the
  * conservative hit test of cl/bvh.h (which rejects t that is positive only through rounding)
  * cannot find it again, and nothing else is skipped: the offset is as small as the point's own
  * error, at any distance from the scene's origin (a fixed number of ULPs of |p|, as before,
@@ -30,12 +29,10 @@ typedef struct {
  * surfaces: no offset); p_error: p's error bound along ng; w: the direction the new ray leaves
  * in (or toward the point a shadow ray goes to). */
 inline float3 offset_ray_origin(float3 p, float3 ng, float p_error, float3 w) {
-    float3 offset = (dot(ng, w) < 0.0f ? -p_error : p_error) * ng;
-    float3 o = p + offset;
-    /* One ULP further away from p where the offset moves a coordinate, so the rounding of the
-     * sum cannot take back part of the offset. */
-    float3 away = select((float3)(-INFINITY), (float3)(INFINITY), offset > 0.0f);
-    return select(o, nextafter(o, away), offset != 0.0f);
+    /* Plus a bound on the rounding of the sum below (half an ULP of each coordinate), so the
+     * rounding cannot take back part of the offset. */
+    float d = p_error + FLOAT_GAMMA(1) * dot(fabs(ng), fabs(p) + p_error);
+    return p + (dot(ng, w) < 0.0f ? -d : d) * ng;
 }
 
 #endif

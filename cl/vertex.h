@@ -27,9 +27,9 @@ typedef struct {
     float pdf_rev;
     float p_error; /* bound on p's distance from its surface along ng (cl/ray.h); 0 off surfaces */
     int type;      /* VERTEX_* */
-    int delta;    /* sampled by a specular (delta) lobe */
-    int material; /* surface: material index */
-    int light;    /* light vertex: its light; surface: the area light of the triangle, or -1 */
+    int delta;     /* sampled by a specular (delta) lobe */
+    int material;  /* surface: material index */
+    int light;     /* light vertex: its light; surface: the area light of the triangle, or -1 */
 #ifdef HAS_TEXTURES
     /* surface: the material's reflectances with its textures applied at the hit, looked up
      * once when the vertex is made (vertex_bsdf runs many times per vertex: sampling, every
@@ -198,11 +198,18 @@ inline float vertex_pdf_light(const SceneData* scene, const PathVertex* v, const
     if (d2 == 0.0f) return 0.0f;
     float inv_d2 = 1.0f / d2;
     w *= sqrt(inv_d2);
-    float pdf_pos, pdf_dir;
-    light_pdf_le(scene, v->light, v->ng, w, &pdf_pos, &pdf_dir);
-    /* Emission from an infinite light starts on the scene's bounding disk (seed ch. 6): the
-     * disk's area density, carried along the parallel rays to `next`. */
-    float pdf = vertex_is_infinite_light(scene, v) ? pdf_pos : pdf_dir * inv_d2;
+    float pdf;
+    if (vertex_is_infinite_light(scene, v)) {
+        /* Emission from an infinite light starts on the scene's bounding disk (seed ch. 6): the
+         * disk's area density, carried along the parallel rays to `next` (light_pdf_le's pdf_pos
+         * for these lights, without the lookup of the direction's density it would add). */
+        float r = scene_radius(scene);
+        pdf = 1.0f / (PI_F * r * r);
+    } else {
+        float pdf_pos, pdf_dir;
+        light_pdf_le(scene, v->light, v->ng, w, &pdf_pos, &pdf_dir);
+        pdf = pdf_dir * inv_d2;
+    }
     if (vertex_on_surface(next)) pdf *= fabs(dot(next->ng, w));
     return pdf;
 }

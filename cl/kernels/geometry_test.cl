@@ -4,9 +4,9 @@
 #include "vertex.h"
 
 /* A vertex from a position, a geometric and a shading normal (0 = not on a surface), its type
- * and light index. */
-/* A vertex at a point the host rounded to float from double: off its surface by at most half
- * an ULP per coordinate, so gamma(1) |p| along ng bounds it (gamma(4) to spare). */
+ * and light index. The host rounded the point to float from double: it is off its surface by at
+ * most half an ULP per coordinate, so gamma(1) |p| along ng bounds its error (gamma(4) to
+ * spare). */
 inline PathVertex make_vertex(float4 p, float4 ng, float4 ns, int type, int light) {
     PathVertex v = vertex_at(type, p.xyz, ng.xyz, FLOAT_GAMMA(4) * dot(fabs(ng.xyz), fabs(p.xyz)));
     v.ns = ns.xyz;
