@@ -129,6 +129,23 @@ std::vector<Sample> sample_bsdf(const Material& m, D3 n, D3 wo, int mode, size_t
     return s;
 }
 
+// bsdf_eval_test over n direction pairs: per pair (bsdf_pdf, bsdf_f) as (pdf, f.x, f.y, f.z).
+std::vector<cl_float4> eval_bsdf(const Material& m, D3 ns, D3 ng, const cl::Buffer& wo, const cl::Buffer& wi, size_t n) {
+    std::vector<Material> materials = {m};
+    cl::Buffer mat = upload(materials);
+    cl::Buffer out = output_buffer<cl_float4>(n);
+    cl::Kernel k = test_kernel("kernels/bsdf_test.cl", kDefines, "bsdf_eval_test");
+    k.setArg(0, mat);
+    k.setArg(1, cl_int(0));
+    k.setArg(2, f4(ns));
+    k.setArg(3, f4(ng));
+    k.setArg(4, wo);
+    k.setArg(5, wi);
+    k.setArg(6, out);
+    launch(k, n);
+    return download<cl_float4>(out, n);
+}
+
 // Unit vector at angle theta from n (theta > pi/2: below the surface).
 D3 direction_at(D3 n, double theta, double phi) {
     return normalize(DFrame(n).from_local(spherical(std::cos(theta), phi)));
@@ -359,19 +376,7 @@ TEST(Bsdf, EvaluationMatchesReference) {
     lobes.push_back(make_lobe("mirror", MATERIAL_MIRROR, {}, {0.9, 0.9, 0.9}, 0.1));
     lobes.push_back(make_lobe("glass", MATERIAL_GLASS, {}, {}, 0.1));
     for (const Lobe& lobe : lobes) {
-        std::vector<Material> materials = {lobe.material};
-        cl::Buffer mat = upload(materials);
-        cl::Buffer out = output_buffer<cl_float4>(n);
-        cl::Kernel k = test_kernel("kernels/bsdf_test.cl", kDefines, "bsdf_eval_test");
-        k.setArg(0, mat);
-        k.setArg(1, cl_int(0));
-        k.setArg(2, f4(kNormal));
-        k.setArg(3, f4(kNormal));
-        k.setArg(4, wo_buf);
-        k.setArg(5, wi_buf);
-        k.setArg(6, out);
-        launch(k, n);
-        std::vector<cl_float4> r = download<cl_float4>(out, n);
+        std::vector<cl_float4> r = eval_bsdf(lobe.material, kNormal, kNormal, wo_buf, wi_buf, n);
         bool delta = lobe.material.kind == MATERIAL_MIRROR || lobe.material.kind == MATERIAL_GLASS;
         for (size_t i = 0; i < n; ++i) {
             double pdf = delta ? 0 : lobe.ref.pdf(wo_d[i], wi_d[i]);
@@ -416,19 +421,7 @@ TEST(Bsdf, FIsZeroWhereverThePdfIs) {
     for (const Lobe& lobe : non_delta_lobes())
         for (int order = 0; order < 2; ++order) {
             cl::Buffer wo_buf = upload(order ? wi : wo), wi_buf = upload(order ? wo : wi);
-            std::vector<Material> materials = {lobe.material};
-            cl::Buffer mat = upload(materials);
-            cl::Buffer out = output_buffer<cl_float4>(n);
-            cl::Kernel k = test_kernel("kernels/bsdf_test.cl", kDefines, "bsdf_eval_test");
-            k.setArg(0, mat);
-            k.setArg(1, cl_int(0));
-            k.setArg(2, f4(kNormal));
-            k.setArg(3, f4(ng));
-            k.setArg(4, wo_buf);
-            k.setArg(5, wi_buf);
-            k.setArg(6, out);
-            launch(k, n);
-            std::vector<cl_float4> r = download<cl_float4>(out, n);
+            std::vector<cl_float4> r = eval_bsdf(lobe.material, kNormal, ng, wo_buf, wi_buf, n);
             size_t positive = 0;
             for (size_t i = 0; i < n; ++i) {
                 const bool f_nonzero = r[i].s[1] != 0 || r[i].s[2] != 0 || r[i].s[3] != 0;

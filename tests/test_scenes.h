@@ -236,54 +236,44 @@ inline Scene room_scene(float light_side) {
     return b.scene;
 }
 
-// Every length in the scene times s: vertices, camera, light positions, bounds. Radiance and
-// reflectance do not change, so the image must not either (point and spot intensities would
-// need s^2 to keep irradiance; the scenes scaled here have none).
-inline void scale_scene(Scene& scene, float s) {
-    auto scale4 = [s](cl_float4& p) {
-        for (int i = 0; i < 3; ++i) p.s[i] *= s;
+// Every position in the scene (vertices, camera eye and target, light positions) mapped by f,
+// the bounds recomputed.
+template <class F>
+inline void map_scene_positions(Scene& scene, F f) {
+    auto map4 = [&](cl_float4& p) {
+        Vec3 q = f(vec3_of(p));
+        for (int i = 0; i < 3; ++i) p.s[i] = q[i];
     };
     Bounds3 bounds;
     for (Triangle& t : scene.triangles) {
-        scale4(t.p0);
-        scale4(t.p1);
-        scale4(t.p2);
+        map4(t.p0);
+        map4(t.p1);
+        map4(t.p2);
         bounds.extend(vec3_of(t.p0));
         bounds.extend(vec3_of(t.p1));
         bounds.extend(vec3_of(t.p2));
     }
     scene.bounds = bounds;
-    scene.camera.eye = scene.camera.eye * s;
-    scene.camera.target = scene.camera.target * s;
-    scene.camera.focus_distance *= s;
-    scene.camera.lens_radius *= s;
+    scene.camera.eye = f(scene.camera.eye);
+    scene.camera.target = f(scene.camera.target);
     for (LightDesc& l : scene.lights) {
-        l.position = l.position * s;
-        l.target = l.target * s;
+        l.position = f(l.position);
+        l.target = f(l.target);
     }
 }
 
-// Every position in the scene moved by `offset`: vertices, camera, light positions, bounds.
+// Every length in the scene times s: positions, focus distance, lens radius. Radiance and
+// reflectance do not change, so the image must not either (point and spot intensities would
+// need s^2 to keep irradiance; the scenes scaled here have none).
+inline void scale_scene(Scene& scene, float s) {
+    map_scene_positions(scene, [s](Vec3 p) { return p * s; });
+    scene.camera.focus_distance *= s;
+    scene.camera.lens_radius *= s;
+}
+
+// Every position in the scene moved by `offset`.
 inline void translate_scene(Scene& scene, Vec3 offset) {
-    auto move = [&](cl_float4& p) {
-        for (int i = 0; i < 3; ++i) p.s[i] += offset[i];
-    };
-    Bounds3 bounds;
-    for (Triangle& t : scene.triangles) {
-        move(t.p0);
-        move(t.p1);
-        move(t.p2);
-        bounds.extend(vec3_of(t.p0));
-        bounds.extend(vec3_of(t.p1));
-        bounds.extend(vec3_of(t.p2));
-    }
-    scene.bounds = bounds;
-    scene.camera.eye = scene.camera.eye + offset;
-    scene.camera.target = scene.camera.target + offset;
-    for (LightDesc& l : scene.lights) {
-        l.position = l.position + offset;
-        l.target = l.target + offset;
-    }
+    map_scene_positions(scene, [offset](Vec3 p) { return p + offset; });
 }
 
 // ---- Statistics -------------------------------------------------------------------------
