@@ -239,9 +239,13 @@ __attribute__((always_inline)) inline bool bvh_hit_triangle(__global const float
 #endif
 
 /* Closest hit along o + t d with t in (0, tmax). d need not be unit length; t is in units of
- * |d|. On a miss returns false with hit->triangle = -1 and hit->t = tmax. */
-inline bool intersect(__global const BvhNode* nodes, __global const Triangle* tris, const Cutouts* cutouts,
-                      float3 o, float3 d, float tmax, Hit* hit) {
+ * |d|. On a miss returns false with hit->triangle = -1 and hit->t = tmax. With exclude_end,
+ * hits within the rounding error of t of tmax do not count either (as in occluded): the
+ * closest hit strictly inside a segment whose far end lies on a surface. */
+__attribute__((always_inline)) inline bool intersect_closest(__global const BvhNode* nodes,
+                                                             __global const Triangle* tris, const Cutouts* cutouts,
+                                                             float3 o, float3 d, float tmax, bool exclude_end,
+                                                             Hit* hit) {
     BvhRay r = bvh_ray(o, d);
     /* Entries still to visit (node index, or leaf entry) and the distance at which the ray
      * enters their boxes. The builder bounds the depth of the stack (host/bvh/bvh.cpp). */
@@ -272,6 +276,8 @@ inline bool intersect(__global const BvhNode* nodes, __global const Triangle* tr
 #ifdef HAS_CUTOUTS
                     if (cutouts && cutout_hides(cutouts, i, b1, b2)) continue;
 #endif
+                    if (exclude_end && !bvh_hit_triangle((__global const float*)(tris + i), &r, tmax, true, &t, &b1, &b2))
+                        continue;
                     hit->t = t;
                     hit->b1 = b1;
                     hit->b2 = b2;
@@ -287,6 +293,18 @@ inline bool intersect(__global const BvhNode* nodes, __global const Triangle* tr
         }
         current = stack_node[sp];
     }
+}
+
+inline bool intersect(__global const BvhNode* nodes, __global const Triangle* tris, const Cutouts* cutouts,
+                      float3 o, float3 d, float tmax, Hit* hit) {
+    return intersect_closest(nodes, tris, cutouts, o, d, tmax, false, hit);
+}
+
+/* The closest hit on the open segment from o to o + d, its ends' surfaces excluded as in
+ * occluded (t in units of |d|, so tmax = 1). */
+inline bool intersect_segment(__global const BvhNode* nodes, __global const Triangle* tris, const Cutouts* cutouts,
+                              float3 o, float3 d, Hit* hit) {
+    return intersect_closest(nodes, tris, cutouts, o, d, 1.0f, true, hit);
 }
 
 __attribute__((always_inline)) inline bool bvh_leaf_occluded(__global const Triangle* tris, const Cutouts* cutouts,

@@ -34,9 +34,12 @@ inline float mis_ratio(float pdf_rev, int rev_is_delta, float pdf_fwd, int fwd_i
 
 /* mix: the strategies in use and their sample counts (cl/strategies.h).
  * sampled: the vertex the connection sampled afresh (camera vertex for t = 1, light vertex for
- * s = 1), ignored otherwise. */
+ * s = 1), ignored otherwise.
+ * to_qs, to_pt: with media, the distance-sampling densities of the connecting segment toward
+ * its light-side and camera-side ends (cl/medium.h; 1 in vacuum, ignored for s = 0). */
 inline float mis_weight(const SceneData* scene, const StrategyMix* mix, const PathVertex* light_path,
-                        const PathVertex* camera_path, const PathVertex* sampled, int s, int t) {
+                        const PathVertex* camera_path, const PathVertex* sampled, int s, int t, float to_qs,
+                        float to_pt) {
     /* The connection's endpoints: t = 1 replaces the camera vertex and (otherwise) s = 1 the
      * light vertex with the freshly sampled one; the subpath arrays are not read there (a path
      * tracer has no light subpath at all). */
@@ -61,6 +64,14 @@ inline float mis_weight(const SceneData* scene, const StrategyMix* mix, const Pa
         pt_minus_pdf_rev = s > 0 ? vertex_pdf(scene, &pt, &qs, pt_minus) : vertex_pdf_light(scene, &pt, pt_minus);
     if (s > 0) qs_pdf_rev = vertex_pdf(scene, &pt, pt_minus, &qs);
     if (qs_minus) qs_minus_pdf_rev = vertex_pdf(scene, &qs, &pt, qs_minus);
+#ifdef HAS_MEDIA
+    /* A density toward a vertex through a medium includes the segment's distance sampling: the
+     * connection's own for the endpoints, the subpath's stored one for their predecessors. */
+    if (s > 0) pt_pdf_rev *= to_pt;
+    qs_pdf_rev *= to_qs;
+    if (pt_minus) pt_minus_pdf_rev *= pt.dist_rev;
+    if (qs_minus) qs_minus_pdf_rev *= qs.dist_rev;
+#endif
 
     /* With sample counts n_i (cl/strategies.h) each term is n_i p_i / (n_s p_s). */
     float inv_count = 1.0f / strategy_sample_count(mix, s, t);

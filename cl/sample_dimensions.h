@@ -15,13 +15,18 @@
  *   SAMPLE_DRAW_LIGHT_POSITION             point on it (2D)                       1
  *   SAMPLE_DRAW_LIGHT_DIRECTION            emitted direction (2D)                 1
  *   sample_draw_camera_bounce(k)           lobe (1D), then direction (2D)         2 per bounce, MAX_DEPTH bounces
- *   sample_draw_light_bounce(k)            lobe (1D), then direction (2D)         2 per bounce, MAX_DEPTH bounces
+ *                                          HAS_MEDIA: then the distance (2D)      3 per bounce, MAX_DEPTH + 1
+ *   sample_draw_light_bounce(k)            lobe (1D), then direction (2D)         as the camera's
  *   sample_draw_lens_connection(s)         t = 1: lens point (2D)                 1 per s = 1 .. MAX_DEPTH + 1
  *   sample_draw_light_connection(t)        s = 1: light choice (1D), point (2D)   2 per t = 2 .. MAX_DEPTH + 1
  *
  * A camera subpath has at most MAX_DEPTH + 1 scattering vertices and samples a direction at
  * all but the last; a light subpath has at most MAX_DEPTH and samples at all but the last
- * (MAX_DEPTH - 1 bounces; one spare slot keeps the formulas alike). Plain C so a host test can
+ * (MAX_DEPTH - 1 bounces; one spare slot keeps the formulas alike). With media, bounce k's third
+ * draw samples the distance along the segment that arrives at the subpath's k-th scattering
+ * vertex (channel and optical depth, cl/medium.h); a camera subpath has MAX_DEPTH + 1 such
+ * segments, so the slots are one more. Without media the table is as it was, and so are the
+ * images. Plain C so a host test can
  * include it with any MAX_DEPTH (tests/sample_dimensions_test.cpp checks the ranges are
  * disjoint and the values they give uncorrelated). */
 #ifndef CLBDPT_SAMPLE_DIMENSIONS_H
@@ -37,10 +42,17 @@
 #define SAMPLE_DRAW_LIGHT_CHOICE 3u
 #define SAMPLE_DRAW_LIGHT_POSITION 4u
 #define SAMPLE_DRAW_LIGHT_DIRECTION 5u
+#ifdef HAS_MEDIA
+#define SAMPLE_DRAWS_PER_BOUNCE 3u
+#define SAMPLE_DRAW_BOUNCE_DISTANCE 2u /* within a bounce's draws */
+#define SAMPLE_BOUNCE_SLOTS ((MAX_DEPTH) + 1u)
+#else
 #define SAMPLE_DRAWS_PER_BOUNCE 2u
+#define SAMPLE_BOUNCE_SLOTS (MAX_DEPTH)
+#endif
 #define SAMPLE_DRAW_CAMERA_BOUNCES 6u
-#define SAMPLE_DRAW_LIGHT_BOUNCES (SAMPLE_DRAW_CAMERA_BOUNCES + SAMPLE_DRAWS_PER_BOUNCE * (MAX_DEPTH))
-#define SAMPLE_DRAW_LENS_CONNECTIONS (SAMPLE_DRAW_LIGHT_BOUNCES + SAMPLE_DRAWS_PER_BOUNCE * (MAX_DEPTH))
+#define SAMPLE_DRAW_LIGHT_BOUNCES (SAMPLE_DRAW_CAMERA_BOUNCES + SAMPLE_DRAWS_PER_BOUNCE * SAMPLE_BOUNCE_SLOTS)
+#define SAMPLE_DRAW_LENS_CONNECTIONS (SAMPLE_DRAW_LIGHT_BOUNCES + SAMPLE_DRAWS_PER_BOUNCE * SAMPLE_BOUNCE_SLOTS)
 #define SAMPLE_DRAW_LIGHT_CONNECTIONS (SAMPLE_DRAW_LENS_CONNECTIONS + (MAX_DEPTH) + 1u)
 #define SAMPLE_DRAWS_PER_LIGHT_CONNECTION 2u
 #define SAMPLE_DRAW_COUNT (SAMPLE_DRAW_LIGHT_CONNECTIONS + SAMPLE_DRAWS_PER_LIGHT_CONNECTION * (MAX_DEPTH))

@@ -11,17 +11,19 @@
 #include "bvh.h"
 #include "camera.h"
 #include "lights.h"
+#include "phase.h"
 #include "scene.h"
 
 #define VERTEX_CAMERA 0
 #define VERTEX_LIGHT 1
 #define VERTEX_SURFACE 2
+#define VERTEX_MEDIUM 3 /* scattered inside a participating medium (cl/medium.h) */
 
 typedef struct {
     float3 p;    /* position; for an escaped camera ray a point 2 scene radii along it */
     float3 ng;   /* geometric normal; 0 where the vertex is not on a surface */
     float3 ns;   /* shading normal (= ng without per-vertex normals) */
-    float3 wo;   /* surface: unit direction toward the previous vertex of its subpath */
+    float3 wo;   /* surface, medium: unit direction toward the previous vertex of its subpath */
     float3 beta; /* throughput of the subpath up to and including this vertex */
     float pdf_fwd;
     float pdf_rev;
@@ -39,6 +41,14 @@ typedef struct {
 #ifdef HAS_EMISSION_TEXTURES
     float3 le; /* on an area light (a light vertex, or a surface vertex on an emitter): the
                   radiance emitted at this point, map_Ke applied */
+#endif
+#ifdef HAS_MEDIA
+    int medium; /* medium vertex: its medium (1 + index) */
+    /* The distance-sampling densities of the segment from the previous vertex of the subpath
+     * (cl/medium.h): of reaching this vertex along it (a factor of pdf_fwd), and of reaching
+     * the previous vertex from this one (a factor of the previous vertex's pdf_rev). 1 where
+     * the segment runs in vacuum. */
+    float dist_fwd, dist_rev;
 #endif
 } PathVertex;
 
@@ -65,6 +75,11 @@ inline PathVertex vertex_at(int type, float3 p, float3 ng, float p_error) {
 #ifdef HAS_EMISSION_TEXTURES
     v.le = (float3)(0.0f);
 #endif
+#ifdef HAS_MEDIA
+    v.medium = 0;
+    v.dist_fwd = 1.0f;
+    v.dist_rev = 1.0f;
+#endif
     return v;
 }
 
@@ -89,6 +104,7 @@ inline int vertex_is_connectible(const SceneData* scene, const PathVertex* v) {
     switch (v->type) {
     case VERTEX_CAMERA: return 1;
     case VERTEX_LIGHT: return !light_is_delta_direction(vertex_light_kind(scene, v));
+    case VERTEX_MEDIUM: return 1;
     default: {
         int kind = scene->materials[v->material].kind;
         return kind != MATERIAL_MIRROR && kind != MATERIAL_GLASS;
@@ -127,6 +143,34 @@ inline Bsdf vertex_bsdf(const SceneData* scene, const PathVertex* v) {
     return b;
 }
 
+#ifdef HAS_MEDIA
+inline float vertex_phase_g(const SceneData* scene, const PathVertex* v) { return scene->media[v->medium - 1].g; }
+#endif
+
+/* Solid-angle density of scattering at surface or medium vertex v from direction wo into wi. */
+inline float vertex_scatter_pdf(const SceneData* scene, const PathVertex* v, float3 wo, float3 wi) {
+#ifdef HAS_MEDIA
+    if (v->type == VERTEX_MEDIUM) return phase_hg(wo, wi, vertex_phase_g(scene, v));
+#endif
+    Bsdf b = vertex_bsdf(scene, v);
+    return bsdf_pdf(&b, wo, wi);
+}
+
+/* Both directions' solid-angle densities at surface or medium vertex v: wo -> wi into *fwd and
+ * wi -> wo into *rev, from one BSDF (a random walk needs the pair at every vertex). */
+inline void vertex_scatter_pdfs(const SceneData* scene, const PathVertex* v, float3 wo, float3 wi, float* fwd,
+                                float* rev) {
+#ifdef HAS_MEDIA
+    if (v->type == VERTEX_MEDIUM) {
+        *fwd = *rev = phase_hg(wo, wi, vertex_phase_g(scene, v)); /* symmetric */
+        return;
+    }
+#endif
+    Bsdf b = vertex_bsdf(scene, v);
+    *fwd = bsdf_pdf(&b, wo, wi);
+    *rev = bsdf_pdf(&b, wi, wo);
+}
+
 /* Solid angle density at `v` toward `next` -> area density at `next` (seed 3.2, ConvertDensity). */
 inline float convert_density(const SceneData* scene, const PathVertex* v, float pdf_w, const PathVertex* next) {
     if (vertex_is_infinite_light(scene, next)) return pdf_w;
@@ -161,6 +205,10 @@ inline float3 vertex_f(const SceneData* scene, const PathVertex* v, const PathVe
         Bsdf b = vertex_bsdf(scene, v);
         return bsdf_f(&b, v->wo, wi) * correct_shading_normal(v, v->wo, wi, mode);
     }
+#ifdef HAS_MEDIA
+    /* sigma_s is in the vertex's throughput (cl/walk.h), as in pbrt-v3. */
+    if (v->type == VERTEX_MEDIUM) return (float3)(phase_hg(v->wo, wi, vertex_phase_g(scene, v)));
+#endif
     if (v->type == VERTEX_LIGHT && vertex_light_kind(scene, v) == LIGHT_AREA)
         return area_light_radiance(vertex_area_le(scene, v), v->ng, wi);
     return (float3)(0.0f);
@@ -245,8 +293,7 @@ inline float vertex_pdf(const SceneData* scene, const PathVertex* v, const PathV
         float dp2 = length_squared(wp);
         if (dp2 == 0.0f) return 0.0f;
         wp *= rsqrt(dp2);
-        Bsdf b = vertex_bsdf(scene, v);
-        pdf_w = bsdf_pdf(&b, wp, wn);
+        pdf_w = vertex_scatter_pdf(scene, v, wp, wn);
     }
     return convert_density(scene, v, pdf_w, next);
 }
@@ -265,13 +312,19 @@ inline int vertices_visible(const SceneData* scene, const PathVertex* a, const P
     return !occluded(scene->nodes, scene->triangles, &scene->cutouts, o, d, 1.0f);
 }
 
-/* Geometric term with visibility (pbrt bdpt.cpp G): cosines at both ends over distance^2. */
-inline float geometry_term(const SceneData* scene, const PathVertex* a, const PathVertex* b) {
+/* The geometric term without visibility: cosines at the surface ends over distance^2. */
+inline float geometry_cosines(const PathVertex* a, const PathVertex* b) {
     float3 d = a->p - b->p;
     float g = 1.0f / length_squared(d);
     d *= sqrt(g);
     if (vertex_on_surface(a)) g *= fabs(dot(a->ns, d));
     if (vertex_on_surface(b)) g *= fabs(dot(b->ns, d));
+    return g;
+}
+
+/* Geometric term with visibility (pbrt bdpt.cpp G). */
+inline float geometry_term(const SceneData* scene, const PathVertex* a, const PathVertex* b) {
+    float g = geometry_cosines(a, b);
     if (g == 0.0f) return 0.0f;
     return vertices_visible(scene, a, b) ? g : 0.0f;
 }

@@ -9,6 +9,9 @@
 #include "rng.h"
 #include "sample_dimensions.h"
 #include "vertex.h"
+#ifdef HAS_MEDIA
+#include "medium.h"
+#endif
 #ifdef HAS_BUMP_MAPS
 #include "bump.h"
 #endif
@@ -54,21 +57,41 @@ inline void surface_vertex_from_hit(const SceneData* scene, const PathVertex* pr
  * MIS evaluation later does, not from the sampled direction: the ray leaves from an offset
  * origin, so the direction to where it landed differs from the sampled one by up to ~1e-5 rad,
  * and a near-specular glossy lobe's density changes by percents over that. With positions on
- * both sides the MIS weights of a path sum to 1 to float precision (tests/mis_test.cpp). */
+ * both sides the MIS weights of a path sum to 1 to float precision (tests/mis_test.cpp).
+ *
+ * With media (cl/medium.h) a segment may end in a medium vertex instead, crosses index-matched
+ * boundaries without a vertex, and its distance-sampling densities become factors of the
+ * densities at both of its ends (PathVertex.dist_fwd, dist_rev). d must be unit length. */
 inline int random_walk(const SceneData* scene, Rng* rng, float3 o, float3 d, float3 beta, float pdf_dir,
                        int max_vertices, int mode, uint first_draw, PathVertex* path, int start) {
     const int end = start + max_vertices;
     float pdf_fwd = pdf_dir;
     int i = start;
+#ifdef HAS_MEDIA
+    int medium = vertex_medium_toward(scene, &path[start - 1], d);
+#endif
     while (i < end && !is_black(beta)) {
         Hit hit;
-        int found = intersect(scene->nodes, scene->triangles, &scene->cutouts, o, d, INFINITY, &hit);
-        ++*scene->rays_traced;
         PathVertex* vertex = &path[i];
         PathVertex* prev = &path[i - 1];
-        if (found) {
+#ifdef HAS_MEDIA
+        rng_seek(rng, first_draw + SAMPLE_DRAWS_PER_BOUNCE * (uint)(i - start) + SAMPLE_DRAW_BOUNCE_DISTANCE);
+        float3 tr;
+        int segment = trace_through_media(scene, &o, d, &medium, rng_next2(rng), &hit, &tr);
+        int found = segment != SEGMENT_LOST;
+        if (segment == SEGMENT_MEDIUM) {
+            *vertex = vertex_at(VERTEX_MEDIUM, o, (float3)(0.0f), 0.0f);
+            vertex->wo = -d;
+            vertex->medium = medium;
+        } else if (found) {
             surface_vertex_from_hit(scene, prev, &hit, vertex);
-        } else {
+        }
+#else
+        int found = intersect(scene->nodes, scene->triangles, &scene->cutouts, o, d, INFINITY, &hit);
+        ++*scene->rays_traced;
+        if (found) surface_vertex_from_hit(scene, prev, &hit, vertex);
+#endif
+        if (!found) {
 #ifdef HAS_ENVIRONMENT
             /* An escaped camera ray ends on the environment light (seed ch. 6); its density
              * stays in solid angle. */
@@ -80,22 +103,50 @@ inline int random_walk(const SceneData* scene, Rng* rng, float3 o, float3 d, flo
             break;
 #endif
         }
+#ifdef HAS_MEDIA
+        /* The segment's distance sampling, weighted by its own density (cl/medium.h). */
+        vertex->dist_fwd = segment_distance_density(scene, tr, vertex);
+        vertex->dist_rev = segment_distance_density(scene, tr, prev);
+        if (vertex->dist_fwd == 0.0f) break;
+        float3 gain = tr / vertex->dist_fwd;
+        if (segment == SEGMENT_MEDIUM) gain *= xyz(scene->media[medium - 1].sigma_s);
+        beta *= gain;
+#endif
         vertex->beta = beta;
         /* A scattering predecessor: its forward density toward this vertex and its own
          * predecessor's reverse density, both from the positions (see above). */
         if (i > start && !prev->delta) {
             float3 w = normalize(vertex->p - prev->p);
-            Bsdf prev_bsdf = vertex_bsdf(scene, prev);
-            pdf_fwd = bsdf_pdf(&prev_bsdf, prev->wo, w);
-            path[i - 2].pdf_rev = convert_density(scene, prev, bsdf_pdf(&prev_bsdf, w, prev->wo), &path[i - 2]);
+            float pdf_rev;
+            vertex_scatter_pdfs(scene, prev, prev->wo, w, &pdf_fwd, &pdf_rev);
+            path[i - 2].pdf_rev = convert_density(scene, prev, pdf_rev, &path[i - 2]);
+#ifdef HAS_MEDIA
+            path[i - 2].pdf_rev *= prev->dist_rev;
+#endif
         }
         vertex->pdf_fwd = convert_density(scene, prev, pdf_fwd, vertex);
+#ifdef HAS_MEDIA
+        vertex->pdf_fwd *= vertex->dist_fwd;
+#endif
         ++i;
         if (vertex->type == VERTEX_LIGHT || i == end) break;
 
         rng_seek(rng, first_draw + SAMPLE_DRAWS_PER_BOUNCE * (uint)(i - 1 - start));
         float u_lobe = rng_next(rng);
         float2 u_dir = rng_next2(rng);
+#ifdef HAS_MEDIA
+        if (vertex->type == VERTEX_MEDIUM) {
+            /* The phase function is its own density, up to the isotropic shortcut of
+             * sample_phase_hg; no delta, no shading normals, the medium stays. */
+            float g = vertex_phase_g(scene, vertex);
+            float3 wi;
+            pdf_fwd = sample_phase_hg(vertex->wo, g, u_dir, &wi);
+            beta *= phase_hg(vertex->wo, wi, g) / pdf_fwd;
+            o = vertex->p;
+            d = wi;
+            continue;
+        }
+#endif
         float3 u = (float3)(u_lobe, u_dir.x, u_dir.y);
         Bsdf b = vertex_bsdf(scene, vertex);
         BsdfSample bs;
@@ -111,6 +162,9 @@ inline int random_walk(const SceneData* scene, Rng* rng, float3 o, float3 d, flo
         beta *= correct_shading_normal(vertex, vertex->wo, bs.wi, mode);
         o = offset_ray_origin(vertex->p, vertex->ng, vertex->p_error, bs.wi);
         d = bs.wi;
+#ifdef HAS_MEDIA
+        medium = medium_beyond(scene, vertex->material, vertex->ng, d);
+#endif
     }
     return i - start;
 }
@@ -168,6 +222,9 @@ inline int generate_light_subpath(const SceneData* scene, Rng* rng, int max_dept
         if (n > 0) {
             path[1].pdf_fwd = er.pdf_pos;
             if (vertex_on_surface(&path[1])) path[1].pdf_fwd *= fabs(dot(er.dir, path[1].ng));
+#ifdef HAS_MEDIA
+            path[1].pdf_fwd *= path[1].dist_fwd;
+#endif
         }
         lv->pdf_fwd = infinite_light_density(scene, er.dir);
     }

@@ -7,6 +7,7 @@
 #include "render/features.h"
 #include "render/scene_buffers.h"
 #include "render_test_util.h"
+#include "test_scenes.h"
 
 namespace clbdpt::test {
 namespace {
@@ -80,6 +81,43 @@ TEST(MisWeights, SumToOneCornellSpecular) { check_scene("cornell-specular", 8); 
 TEST(MisWeights, SumToOneVeachMis) { check_scene("veach-mis", 5); }
 TEST(MisWeights, SumToOneSky) { check_scene("sky", 5); }
 TEST(MisWeights, SumToOneLampCeiling) { check_scene("lamp-ceiling", 6, 20); }
+
+// Paths through media (cl/medium.h): medium vertices, index-matched boundaries, distance
+// densities on both sides of every connection. A fog-filled room; a scattering ball behind an
+// interface beside a glass sphere with a scattering interior, lit by the ceiling; the camera
+// inside a ball under the environment (escaped rays end on an infinite light).
+TEST(MisWeights, SumToOneInMedia) {
+    {
+        SceneBuilder b;
+        RoomMaterials m = room_materials(b);
+        room_walls(b, m);
+        ceiling_light(b, {0, 1.999f, 0.2f}, 0.5f, m.light);
+        room_camera(b);
+        fill_with(b.scene, add_medium(b.scene, "fog", {0.05f, 0.05f, 0.1f}, {0.5f, 0.6f, 0.7f}, 0.4f));
+        check_scene(b.scene, "fog-filled room", 5);
+    }
+    {
+        SceneBuilder b;
+        RoomMaterials m = room_materials(b);
+        room_walls(b, m, /*with_block=*/false);
+        ceiling_light(b, {0, 1.999f, 0.2f}, 0.5f, m.light);
+        room_camera(b);
+        int cloud = add_medium(b.scene, "cloud", {0.5f, 1.0f, 1.5f}, {4.0f, 4.0f, 3.0f}, -0.3f);
+        b.sphere({-0.4f, 0.5f, 0.3f}, 0.35f, 2, /*inward=*/false, b.material(interface_material(cloud), "cloud"));
+        Material glass = glass_material(1.5f);
+        glass.interior_medium = add_medium(b.scene, "milk", {0.1f, 0.1f, 0.1f}, {2, 2, 2}, 0.6f);
+        b.sphere({0.45f, 0.4f, 0.2f}, 0.3f, 2, /*inward=*/false, b.material(glass, "milky glass"));
+        check_scene(b.scene, "scattering ball and milky glass", 8);
+    }
+    {
+        SceneBuilder b;
+        int white = add_medium(b.scene, "white", {0, 0, 0}, {1, 1, 1}, 0.5f);
+        b.sphere({0, 0, 0}, 1.0f, 3, /*inward=*/false, b.material(interface_material(white), "ball"));
+        b.camera({0, 0, 0}, {0.3f, 0.2f, 1}, 90.0f);
+        add_environment(b.scene, {1, 1, 1});
+        check_scene(b.scene, "inside a ball under the sky", 6);
+    }
+}
 
 // Efficiency-aware mixes (cl/strategies.h): the count-weighted balance heuristic still sums to 1
 // over the strategies the mix enables.

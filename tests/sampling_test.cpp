@@ -11,7 +11,7 @@
 namespace clbdpt::test {
 namespace {
 
-enum Warp { kDisk = 0, kCosineHemisphere = 1, kSphere = 2, kCone = 3, kTriangle = 4 };
+enum Warp { kDisk = 0, kCosineHemisphere = 1, kSphere = 2, kCone = 3, kTriangle = 4, kHenyeyGreenstein = 5 };
 
 std::vector<cl_float4> warp(Warp w, float cos_max, size_t n, uint32_t seed) {
     cl::Kernel k = test_kernel("kernels/sampling_test.cl", {}, "warp_test");
@@ -98,6 +98,41 @@ TEST(Sampling, UniformConeIsUniformInsideTheCone) {
         }
         std::string what = "cone " + std::to_string(degrees);
         expect_uniform(obs, what.c_str());
+    }
+}
+
+// Henyey-Greenstein (cl/phase.h): cos theta from straight on and the azimuth in a 10 x 20 grid
+// against the distribution's exact CDF, F(mu) = (1 - g^2) / (2 g) ((1 + g^2 - 2 g mu)^-1/2 -
+// 1 / (1 + g)); the density sampling returns is phase_hg's value, and integrates to 1.
+TEST(Sampling, HenyeyGreensteinFollowsItsDensity) {
+    for (float g : {0.0f, 0.3f, -0.5f, 0.9f}) {
+        auto cdf = [g](double mu) {
+            if (g == 0.0f) return 0.5 * (mu + 1);
+            double gg = g;
+            return (1 - gg * gg) / (2 * gg) * (1 / std::sqrt(1 + gg * gg - 2 * gg * mu) - 1 / (1 + gg));
+        };
+        std::vector<cl_float4> s = warp(kHenyeyGreenstein, g, kSamples, 7 + uint32_t(100 * (g + 1)));
+        std::vector<double> obs(kRadial * kAngular, 0.0), expected(kRadial * kAngular, 0.0);
+        for (int i = 0; i < kRadial; ++i) {
+            double mass = cdf(-1 + 2.0 * (i + 1) / kRadial) - cdf(-1 + 2.0 * i / kRadial);
+            for (int j = 0; j < kAngular; ++j) expected[i * kAngular + j] = double(kSamples) * mass / kAngular;
+        }
+        double pdf_over_density_sum = 0, inverse_pdf_squares = 0;
+        for (const cl_float4& p : s) {
+            D3 w = d3(p);
+            ASSERT_NEAR(length(w), 1.0, 1e-5);
+            ASSERT_GT(p.s[3], 0.0f) << "g " << g << ": the density returned differs from phase_hg";
+            pdf_over_density_sum += 1.0 / p.s[3];
+            inverse_pdf_squares += 1.0 / (double(p.s[3]) * p.s[3]);
+            obs[cell((w.z + 1) / 2, w.x, w.y)] += 1;
+        }
+        ChiSquare chi = chi_square(obs, expected);
+        EXPECT_GT(chi.p_value, kChiSquareSignificance) << "g " << g << ": chi2 " << chi.statistic << ", worst " << chi.worst;
+        // 1 / pdf averages to 4 pi, the sphere's area: within 5 standard errors of the samples'
+        // own spread.
+        const double mean = pdf_over_density_sum / double(kSamples);
+        const double se = std::sqrt(std::max(0.0, inverse_pdf_squares / double(kSamples) - mean * mean) / double(kSamples));
+        EXPECT_LE(std::fabs(mean - 4 * kPi), 5 * se + 1e-6) << "g " << g << ": E[1/pdf] " << mean << " +- " << se;
     }
 }
 

@@ -621,6 +621,83 @@ TEST(SceneErrors, ErrorsInsideAJsonSceneNameTheMesh) {
     EXPECT_CONTAINS(load_error(t.path()), data("out_of_range.obj") + ":5: vertex index 7 out of range");
 }
 
+// ---- Participating media ---------------------------------------------------------------------
+
+// media_box.obj: a closed cube "smoke", an open glass quad "veil", a floor "white", a "lamp".
+std::string media_scene(const std::string& extra) {
+    return R"({"meshes": [)" + quoted_mesh("media_box.obj") + "]" + (extra.empty() ? "" : ", " + extra) + "}";
+}
+
+TEST(SceneMedia, MediaMaterialsAndTheSceneMedium) {
+    TempScene t(media_scene(R"("media": {"fog": {"sigma_a": [0.1, 0.2, 0.3], "sigma_s": [1, 2, 3], "g": 0.25},
+                                          "smoke": {"sigma_s": [4, 4, 4]}},
+                               "medium": "fog",
+                               "materials": {"smoke": {"interface": true, "interior": "smoke"}})"));
+    const Scene scene = load_scene(t.path());
+    ASSERT_EQ(scene.media.size(), 2u);
+    EXPECT_EQ(scene.media[0].name, "fog");
+    expect_vec(scene.media[0].sigma_a, 0.1f, 0.2f, 0.3f);
+    expect_vec(scene.media[0].sigma_s, 1, 2, 3);
+    EXPECT_FLOAT_EQ(scene.media[0].g, 0.25f);
+    expect_vec(scene.media[1].sigma_a, 0, 0, 0);  // absent coefficients are 0
+    EXPECT_FLOAT_EQ(scene.media[1].g, 0.0f);
+    EXPECT_EQ(scene.scene_medium, 1);
+    const Material& smoke = material(scene, "smoke");
+    EXPECT_EQ(smoke.kind, MATERIAL_INTERFACE);
+    EXPECT_EQ(smoke.interior_medium, 2);
+    EXPECT_EQ(smoke.exterior_medium, 1);  // the scene's medium, by default
+    // Both sides of everything else hold the scene's medium: an open glass quad is fine.
+    EXPECT_EQ(material(scene, "white").interior_medium, 1);
+    EXPECT_EQ(material(scene, "white").exterior_medium, 1);
+    EXPECT_EQ(material(scene, "veil").interior_medium, 1);
+    EXPECT_EQ(material(scene, "veil").exterior_medium, 1);
+}
+
+TEST(SceneMedia, NoDefaultEnvironmentInAFoggyScene) {
+    // Without "lights" and with an emitter the scene needs no default light anyway; a foggy
+    // scene whose only light is missing gets none (an environment cannot shine through fog).
+    TempScene t(R"({"meshes": [)" + quoted_mesh("frame.obj") +
+                R"(], "media": {"fog": {"sigma_s": [1, 1, 1]}}, "medium": "fog"})");
+    const Scene scene = load_scene(t.path());
+    EXPECT_TRUE(scene.lights.empty());
+}
+
+struct BadMediaCase {
+    const char* extra;
+    const char* expected;
+};
+
+void PrintTo(const BadMediaCase& c, std::ostream* os) { *os << c.expected; }
+
+class SceneMediaErrors : public ::testing::TestWithParam<BadMediaCase> {};
+
+TEST_P(SceneMediaErrors, OneClearLine) {
+    TempScene t(media_scene(GetParam().extra));
+    const std::string message = load_error(t.path());
+    EXPECT_CONTAINS(message, t.path() + ": ");
+    EXPECT_CONTAINS(message, GetParam().expected);
+    EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Cases, SceneMediaErrors,
+    ::testing::Values(
+        BadMediaCase{R"("media": {"fog": {"sigma_a": [-1, 0, 0]}})", R"("media.fog.sigma_a" must not be negative)"},
+        BadMediaCase{R"("media": {"fog": {"sigma_s": [1, 1, 1], "g": 1}})", R"("media.fog.g" must be between -1 and 1)"},
+        BadMediaCase{R"("media": {"fog": {"sigma_t": [1, 1, 1]}})", R"(unknown key "media.fog.sigma_t")"},
+        BadMediaCase{R"("media": {"fog": [1, 2]})", R"("media.fog" must be an object)"},
+        BadMediaCase{R"("medium": "mist")", R"("medium" names no medium of "media" (got "mist"))"},
+        BadMediaCase{R"("media": {"fog": {}}, "materials": {"smoke": {"interior": "mist"}})",
+                     R"("materials.smoke.interior" names no medium)"},
+        BadMediaCase{R"("materials": {"glass": {"interface": true}})", R"("materials.glass" names no material of the meshes)"},
+        BadMediaCase{R"("materials": {"smoke": {"interface": "yes"}})", R"("materials.smoke.interface" must be true or false)"},
+        BadMediaCase{R"("materials": {"lamp": {"interface": true}})", R"("materials.lamp.interface" cannot be set on an emissive)"},
+        BadMediaCase{R"("media": {"ink": {"sigma_a": [1, 1, 1]}}, "materials": {"veil": {"interior": "ink"}})",
+                     R"(material "veil" separates two media but its surface is not closed (4 edge(s))"},
+        BadMediaCase{R"("media": {"fog": {"sigma_s": [1, 1, 1]}}, "medium": "fog",
+                        "lights": [{"type": "environment", "radiance": [1, 1, 1]}])",
+                     R"("lights[0]" is infinitely far: it cannot shine through the scene-wide "medium")"}));
+
 // ---- Bare OBJ scenes ---------------------------------------------------------------------
 
 TEST(BareObj, CameraFramesTheBounds) {

@@ -236,6 +236,40 @@ inline Scene room_scene(float light_side) {
     return b.scene;
 }
 
+// ---- Participating media (cl/medium.h) ----
+
+// 1 + the index of a new medium.
+inline int add_medium(Scene& scene, const std::string& name, Vec3 sigma_a, Vec3 sigma_s, float g) {
+    MediumDesc m;
+    m.name = name;
+    m.sigma_a = sigma_a;
+    m.sigma_s = sigma_s;
+    m.g = g;
+    scene.media.push_back(m);
+    return int(scene.media.size());
+}
+
+inline Material interface_material(int interior, int exterior = 0) {
+    Material m = diffuse_material({0, 0, 0});
+    m.kind = MATERIAL_INTERFACE;
+    m.interior_medium = interior;
+    m.exterior_medium = exterior;
+    return m;
+}
+
+// The scene-wide medium on both sides of every material, as the scene file's "medium" makes it.
+inline void fill_with(Scene& scene, int medium) {
+    scene.scene_medium = medium;
+    for (Material& m : scene.materials) m.interior_medium = m.exterior_medium = medium;
+}
+
+inline void add_environment(Scene& scene, Vec3 radiance) {
+    LightDesc env;
+    env.kind = LightDesc::Kind::Environment;
+    env.color = radiance;
+    scene.lights.push_back(env);
+}
+
 // Every position in the scene (vertices, camera eye and target, light positions) mapped by f,
 // the bounds recomputed.
 template <class F>

@@ -15,20 +15,21 @@
     S(TextureInfo) F(TextureInfo, offset) F(TextureInfo, width) F(TextureInfo, height)            \
         F(TextureInfo, format) F(TextureInfo, scale_u) F(TextureInfo, offset_v) F(TextureInfo, clamp) \
     S(Material) F(Material, kd) F(Material, ks) F(Material, ke) F(Material, kind)                 \
-        F(Material, ior) F(Material, alpha) F(Material, pad0) F(Material, kd_texture)             \
+        F(Material, ior) F(Material, alpha) F(Material, interior_medium) F(Material, kd_texture)             \
         F(Material, ks_texture) F(Material, ke_texture) F(Material, cutout_texture)               \
         F(Material, cutout_channel) F(Material, bump_texture) F(Material, bump_is_normal_map)     \
-        F(Material, bump_scale)                                                                   \
+        F(Material, bump_scale) F(Material, exterior_medium)                                      \
+    S(Medium) F(Medium, sigma_a) F(Medium, sigma_s) F(Medium, sigma_t) F(Medium, g)                \
     S(Light) F(Light, position) F(Light, direction) F(Light, emission) F(Light, kind)             \
         F(Light, triangle) F(Light, one_minus_cos_total) F(Light, one_minus_cos_falloff) F(Light, area)   \
-        F(Light, select_pdf) F(Light, pad0) F(Light, pad1)                                        \
+        F(Light, select_pdf) F(Light, medium) F(Light, pad1)                                        \
     S(Camera) F(Camera, eye) F(Camera, right) F(Camera, up) F(Camera, forward)                    \
         F(Camera, tan_half_width) F(Camera, tan_half_height) F(Camera, lens_radius)               \
         F(Camera, focus_distance) F(Camera, width) F(Camera, height) F(Camera, film_area)         \
         F(Camera, lens_area)                                                                      \
     S(SceneInfo) F(SceneInfo, world_center) F(SceneInfo, light_count)                             \
         F(SceneInfo, environment_light) F(SceneInfo, env_width) F(SceneInfo, env_height)          \
-        F(SceneInfo, triangle_count) F(SceneInfo, node_count) F(SceneInfo, pad0)                  \
+        F(SceneInfo, triangle_count) F(SceneInfo, node_count) F(SceneInfo, camera_medium)                  \
         F(SceneInfo, pad1)                                                                        \
     S(RenderParams) F(RenderParams, width) F(RenderParams, height) F(RenderParams, first_pixel)   \
         F(RenderParams, pixel_count) F(RenderParams, sample_index) F(RenderParams, seed)          \

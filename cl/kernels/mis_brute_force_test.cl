@@ -74,7 +74,7 @@ __kernel void mis_weight_test(SCENE_KERNEL_ARGS, __global const TestVertex* vert
         sampled.pdf_rev = 0.0f;
         sampled.pdf_fwd = vertex_pdf_light_origin(&scene, &sampled, &camera_path[c.t - 1]);
     }
-    out[gid] = mis_weight(&scene, &mix, light_path, camera_path, &sampled, c.s, c.t);
+    out[gid] = mis_weight(&scene, &mix, light_path, camera_path, &sampled, c.s, c.t, 1.0f, 1.0f);
 }
 
 #endif

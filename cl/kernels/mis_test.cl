@@ -6,7 +6,8 @@
  * have had — x_k .. x_t reversed, with forward densities computed from the light side and
  * reverse densities taken from the camera walk — and calls mis_weight. The weights of the
  * strategies that can produce the path (enabled, and joining two non-specular vertices) must
- * add up to 1.
+ * add up to 1. With media, the reversed vertices swap their segments' distance densities and
+ * the connection's are those of the camera walk's segment it replaces.
  *
  * out[gid] = (largest |sum - 1| over the item's paths, number of paths checked). */
 #include "connect.h"
@@ -62,13 +63,29 @@ __kernel void mis_weight_sums(SCENE_KERNEL_ARGS, RenderParams params, __global f
             PathVertex light_path[MAX_DEPTH + 2];
             for (int j = 0; j < s; ++j) {
                 PathVertex v = j == 0 ? light0 : x[k - j];
+#ifdef HAS_MEDIA
+                /* The segment from its light-side predecessor x_{k-j+1}, walked the other way. */
+                v.dist_fwd = j == 0 ? 1.0f : x[k - j + 1].dist_rev;
+                v.dist_rev = j == 0 ? 1.0f : x[k - j + 1].dist_fwd;
+#endif
                 /* Light-side density of this vertex, camera-side density as its reverse. */
                 if (j == 0) v.pdf_fwd = vertex_pdf_light_origin(&scene, &light0, &x[k - 1]);
                 else if (j == 1) v.pdf_fwd = vertex_pdf_light(&scene, &light_path[0], &v);
                 else v.pdf_fwd = vertex_pdf(&scene, &light_path[j - 1], &light_path[j - 2], &v);
+#ifdef HAS_MEDIA
+                v.pdf_fwd *= v.dist_fwd;
+#endif
                 v.pdf_rev = x[k - j].pdf_fwd;
                 light_path[j] = v;
             }
+            /* The connection joins x_{t-1} and x_t along the walk's own segment. */
+            float to_qs = 1.0f, to_pt = 1.0f;
+#ifdef HAS_MEDIA
+            if (s > 0 && t > 0) {
+                to_qs = x[t].dist_fwd;
+                to_pt = x[t].dist_rev;
+            }
+#endif
             PathVertex sampled;
             if (t == 1) {
                 sampled = x[0];
@@ -77,7 +94,7 @@ __kernel void mis_weight_sums(SCENE_KERNEL_ARGS, RenderParams params, __global f
             } else if (s == 1) {
                 sampled = light_path[0];
             }
-            float w = mis_weight(&scene, &mix, light_path, x, &sampled, s, t);
+            float w = mis_weight(&scene, &mix, light_path, x, &sampled, s, t, to_qs, to_pt);
 #ifdef MIS_TEST_DEBUG
             printf("gid %d k %d s %d t %d w %g\n", gid, k, s, t, w);
 #endif

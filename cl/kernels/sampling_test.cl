@@ -1,5 +1,6 @@
 /* Test kernels for cl/sampling.h (tests/sampling_test.cpp): every warp on counter-based random
  * numbers, and find_interval on a given CDF. */
+#include "phase.h"
 #include "rng.h"
 #include "sampling.h"
 
@@ -8,9 +9,12 @@
 #define WARP_UNIFORM_SPHERE 2
 #define WARP_UNIFORM_CONE 3
 #define WARP_UNIFORM_TRIANGLE 4
+#define WARP_HENYEY_GREENSTEIN 5 /* cos_max is g; wo = (0, 0, -1), so straight on is +z */
 
 /* out[i] = (the warped point, its density where sampling.h has one, else 0). Disk and
- * triangle: (x, y, 0, 0) and (b0, b1, 0, 0). */
+ * triangle: (x, y, 0, 0) and (b0, b1, 0, 0). Henyey-Greenstein: (wi, the density sampling
+ * returned) and, in place of nothing, phase_hg's value is checked through out[i].w as well:
+ * w = the returned density when it equals phase_hg, else -1. */
 __kernel void warp_test(int warp, float cos_max, uint seed, __global float4* out) {
     int gid = get_global_id(0);
     Rng rng = rng_init((uint)gid, 0u, seed);
@@ -26,6 +30,13 @@ __kernel void warp_test(int warp, float cos_max, uint seed, __global float4* out
     case WARP_UNIFORM_SPHERE: r = (float4)(sample_uniform_sphere(u), INV_4PI_F); break;
     case WARP_UNIFORM_CONE: r = (float4)(sample_uniform_cone(u, 1.0f - cos_max), uniform_cone_pdf(1.0f - cos_max)); break;
     case WARP_UNIFORM_TRIANGLE: r.xy = sample_uniform_triangle(u); break;
+    case WARP_HENYEY_GREENSTEIN: {
+        float3 wo = (float3)(0.0f, 0.0f, -1.0f), wi;
+        float pdf = sample_phase_hg(wo, cos_max, u, &wi);
+        float f = phase_hg(wo, wi, cos_max);
+        r = (float4)(wi, fabs(f - pdf) <= 1e-4f * pdf || fabs(cos_max) < 1e-3f ? pdf : -1.0f);
+        break;
+    }
     }
     out[gid] = r;
 }

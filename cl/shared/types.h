@@ -86,6 +86,8 @@ typedef struct {
 #define MATERIAL_GLOSSY 1  /* Kd / pi + Ks * GGX microfacet reflection */
 #define MATERIAL_MIRROR 2  /* perfect specular reflection, reflectance Ks */
 #define MATERIAL_GLASS 3   /* smooth dielectric, index ior, Fresnel reflection + refraction */
+#define MATERIAL_INTERFACE 4 /* no surface at all, only where media meet (pbrt's Material ""): rays
+                                pass it unchanged and enter the medium on its other side */
 
 typedef struct {
     clbdpt_float4 kd; /* diffuse reflectance (rgb) */
@@ -94,7 +96,10 @@ typedef struct {
     clbdpt_int kind;  /* MATERIAL_* */
     float ior;        /* glass: index of refraction inside (front face = outside) */
     float alpha;      /* glossy: GGX roughness alpha */
-    clbdpt_int pad0;
+    /* Participating media on either side (1 + the Medium index, 0 = vacuum): interior behind
+     * the back face, exterior in front of the front face (the winding's normal side). A
+     * scene-wide medium is on both sides unless the scene file says otherwise. */
+    clbdpt_int interior_medium;
     /* Textures: 1 + the TextureInfo index, 0 = none (so a zero-initialised Material has none).
      * A reflectance map multiplies kd or ks (the MTL rule). */
     clbdpt_int kd_texture;    /* map_Kd */
@@ -105,7 +110,21 @@ typedef struct {
     clbdpt_int bump_texture;  /* bump / map_bump (a height field) or norm (a tangent-space normal map) */
     clbdpt_int bump_is_normal_map;
     float bump_scale;         /* height map: MTL -bm, multiplies BUMP_HEIGHT_IN_TEXELS (cl/bump.h) */
+    clbdpt_int exterior_medium; /* see interior_medium */
+    clbdpt_int pad1, pad2, pad3;
 } Material;
+
+/* ---- Participating media -------------------------------------------------------------- */
+
+/* A homogeneous medium (cl/medium.h): coefficients per scene unit and RGB channel, and the
+ * Henyey-Greenstein asymmetry of its phase function (-1 < g < 1, 0 isotropic). */
+typedef struct {
+    clbdpt_float4 sigma_a; /* absorption */
+    clbdpt_float4 sigma_s; /* scattering */
+    clbdpt_float4 sigma_t; /* extinction: sigma_a + sigma_s, stored to save the sum per use */
+    float g;
+    clbdpt_int pad0, pad1, pad2;
+} Medium;
 
 /* ---- Lights --------------------------------------------------------------------------- */
 
@@ -129,7 +148,8 @@ typedef struct {
     float area;              /* area: triangle area */
     float select_pdf;        /* probability that light selection picks this light, in
                                 proportion to its power (DeviceScene::light_power) */
-    clbdpt_int pad0, pad1;
+    clbdpt_int medium;       /* point, spot: the medium around the light (1 + index, 0 = vacuum) */
+    clbdpt_int pad1;
 } Light;
 
 /* ---- Camera --------------------------------------------------------------------------- */
@@ -161,7 +181,8 @@ typedef struct {
     clbdpt_int env_height;
     clbdpt_int triangle_count;
     clbdpt_int node_count;
-    clbdpt_int pad0, pad1;
+    clbdpt_int camera_medium; /* the medium around the camera (1 + index, 0 = vacuum) */
+    clbdpt_int pad1;
 } SceneInfo;
 
 /* ---- Per-launch parameters and outputs ------------------------------------------------- */

@@ -28,16 +28,31 @@ float hit_triangle(const Triangle& tri, Vec3 o, Vec3 d) {
 }  // namespace
 
 float closest_hit_distance(const std::vector<BvhNode>& nodes, const std::vector<Triangle>& triangles, Vec3 o, Vec3 d) {
-    if (nodes.empty()) return INFINITY;
+    float t = INFINITY;
+    closest_hit_triangle(nodes, triangles, o, d, &t);
+    return t;
+}
+
+int closest_hit_triangle(const std::vector<BvhNode>& nodes, const std::vector<Triangle>& triangles, Vec3 o, Vec3 d,
+                         float* distance) {
+    *distance = INFINITY;
+    if (nodes.empty()) return -1;
     const Vec3 inv(1.0f / d.x, 1.0f / d.y, 1.0f / d.z);
     float closest = INFINITY;
+    int closest_triangle = -1;
     std::vector<int> stack{0};
     while (!stack.empty()) {
         const int entry = stack.back();
         stack.pop_back();
         if (entry < 0) {
             const int first = BVH_LEAF_FIRST(entry), count = BVH_LEAF_COUNT(entry);
-            for (int i = first; i < first + count; ++i) closest = std::fmin(closest, hit_triangle(triangles[size_t(i)], o, d));
+            for (int i = first; i < first + count; ++i) {
+                const float t = hit_triangle(triangles[size_t(i)], o, d);
+                if (t < closest) {
+                    closest = t;
+                    closest_triangle = i;
+                }
+            }
             continue;
         }
         const BvhNode& node = nodes[size_t(entry)];
@@ -54,7 +69,8 @@ float closest_hit_distance(const std::vector<BvhNode>& nodes, const std::vector<
             if (t0 <= t1) stack.push_back(node.child[c]);
         }
     }
-    return closest;
+    *distance = closest;
+    return closest_triangle;
 }
 
 }  // namespace clbdpt

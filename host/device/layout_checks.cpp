@@ -57,19 +57,26 @@ CLBDPT_CHECK_FIELD(TextureInfo, scale_u, 16);
 CLBDPT_CHECK_FIELD(TextureInfo, offset_v, 28);
 CLBDPT_CHECK_FIELD(TextureInfo, clamp, 32);
 
-CLBDPT_CHECK_STRUCT(Material, 96, 16);
+CLBDPT_CHECK_STRUCT(Material, 112, 16);
 CLBDPT_CHECK_FIELD(Material, kd, 0);
 CLBDPT_CHECK_FIELD(Material, ks, 16);
 CLBDPT_CHECK_FIELD(Material, ke, 32);
 CLBDPT_CHECK_FIELD(Material, kind, 48);
 CLBDPT_CHECK_FIELD(Material, ior, 52);
 CLBDPT_CHECK_FIELD(Material, alpha, 56);
-CLBDPT_CHECK_FIELD(Material, pad0, 60);
+CLBDPT_CHECK_FIELD(Material, interior_medium, 60);
 CLBDPT_CHECK_FIELD(Material, kd_texture, 64);
 CLBDPT_CHECK_FIELD(Material, ke_texture, 72);
 CLBDPT_CHECK_FIELD(Material, cutout_texture, 76);
 CLBDPT_CHECK_FIELD(Material, bump_texture, 84);
 CLBDPT_CHECK_FIELD(Material, bump_scale, 92);
+CLBDPT_CHECK_FIELD(Material, exterior_medium, 96);
+
+CLBDPT_CHECK_STRUCT(Medium, 64, 16);
+CLBDPT_CHECK_FIELD(Medium, sigma_a, 0);
+CLBDPT_CHECK_FIELD(Medium, sigma_s, 16);
+CLBDPT_CHECK_FIELD(Medium, sigma_t, 32);
+CLBDPT_CHECK_FIELD(Medium, g, 48);
 
 CLBDPT_CHECK_STRUCT(Light, 80, 16);
 CLBDPT_CHECK_FIELD(Light, position, 0);
@@ -81,7 +88,7 @@ CLBDPT_CHECK_FIELD(Light, one_minus_cos_total, 56);
 CLBDPT_CHECK_FIELD(Light, one_minus_cos_falloff, 60);
 CLBDPT_CHECK_FIELD(Light, area, 64);
 CLBDPT_CHECK_FIELD(Light, select_pdf, 68);
-CLBDPT_CHECK_FIELD(Light, pad0, 72);
+CLBDPT_CHECK_FIELD(Light, medium, 72);
 CLBDPT_CHECK_FIELD(Light, pad1, 76);
 
 CLBDPT_CHECK_STRUCT(Camera, 96, 16);
@@ -106,7 +113,7 @@ CLBDPT_CHECK_FIELD(SceneInfo, env_width, 24);
 CLBDPT_CHECK_FIELD(SceneInfo, env_height, 28);
 CLBDPT_CHECK_FIELD(SceneInfo, triangle_count, 32);
 CLBDPT_CHECK_FIELD(SceneInfo, node_count, 36);
-CLBDPT_CHECK_FIELD(SceneInfo, pad0, 40);
+CLBDPT_CHECK_FIELD(SceneInfo, camera_medium, 40);
 CLBDPT_CHECK_FIELD(SceneInfo, pad1, 44);
 
 CLBDPT_CHECK_STRUCT(RenderParams, 64, 4);

@@ -6,6 +6,7 @@
 #include <map>
 #include <numeric>
 
+#include "bvh/bvh_query.h"
 #include "util/error.h"
 
 namespace clbdpt {
@@ -125,6 +126,24 @@ std::vector<float> environment_distribution(const EnvironmentMap& map) {
     return d;
 }
 
+namespace {
+
+// The medium at point p (1 + index, 0 = vacuum): the side facing p of the first surface a probe
+// ray meets (media boundaries are closed, medium_boundaries.cpp), or the scene's medium where
+// the ray meets nothing. The direction is an arbitrary one that no axis-aligned wall contains.
+int medium_at(const DeviceScene& ds, int scene_medium, Vec3 p) {
+    const Vec3 d = normalize(Vec3(0.3137f, 0.8712f, 0.3776f));
+    float distance;
+    const int hit = closest_hit_triangle(ds.nodes, ds.triangles, p, d, &distance);
+    if (hit < 0) return scene_medium;
+    const Triangle& t = ds.triangles[size_t(hit)];
+    const Vec3 ng = cross(vec3_of(t.p1) - vec3_of(t.p0), vec3_of(t.p2) - vec3_of(t.p0));
+    const Material& m = ds.materials[size_t(ds.infos[size_t(hit)].material)];
+    return dot(d, ng) < 0.0f ? m.exterior_medium : m.interior_medium;
+}
+
+}  // namespace
+
 DeviceScene build_device_scene(const Scene& scene, int width, int height) {
     DeviceScene ds;
     Bvh bvh = build_bvh(scene.triangles);
@@ -138,6 +157,15 @@ DeviceScene build_device_scene(const Scene& scene, int width, int height) {
     ds.texels = scene.texels;
     ds.materials = scene.materials;
     ds.camera = make_camera(scene.camera, width, height);
+    for (const MediumDesc& desc : scene.media) {
+        Medium m{};
+        m.sigma_a = float4_of(desc.sigma_a);
+        m.sigma_s = float4_of(desc.sigma_s);
+        m.sigma_t = float4_of(desc.sigma_a + desc.sigma_s);
+        m.g = desc.g;
+        ds.media.push_back(m);
+    }
+    ds.info.camera_medium = medium_at(ds, scene.scene_medium, scene.camera.eye);
 
     Vec3 center = scene.bounds.center();
     float radius = 0.5f * length(scene.bounds.extent());
@@ -179,12 +207,14 @@ DeviceScene build_device_scene(const Scene& scene, int width, int height) {
         switch (desc.kind) {
         case LightDesc::Kind::Point:
             l.kind = LIGHT_POINT;
+            l.medium = medium_at(ds, scene.scene_medium, desc.position);
             l.position = float4_of(desc.position, 1.0f);
             l.emission = float4_of(desc.color);
             power = 4.0f * kPi * luminance(desc.color);
             break;
         case LightDesc::Kind::Spot: {
             l.kind = LIGHT_SPOT;
+            l.medium = medium_at(ds, scene.scene_medium, desc.position);
             l.position = float4_of(desc.position, 1.0f);
             Vec3 axis = desc.target - desc.position;
             if (!(length(axis) > 0)) throw Error(scene.path + ": spot light 'target' equals its 'position'");
@@ -206,6 +236,7 @@ DeviceScene build_device_scene(const Scene& scene, int width, int height) {
             break;
         }
         case LightDesc::Kind::Directional:
+            if (scene.scene_medium != 0) throw Error(scene.path + ": a directional light cannot shine through the scene-wide medium");
             l.kind = LIGHT_DIRECTIONAL;
             if (!(length(desc.direction) > 0)) throw Error(scene.path + ": directional light has a zero 'direction'");
             l.direction = float4_of(normalize(desc.direction));
@@ -213,6 +244,7 @@ DeviceScene build_device_scene(const Scene& scene, int width, int height) {
             power = kPi * radius * radius * luminance(desc.color);
             break;
         case LightDesc::Kind::Environment: {
+            if (scene.scene_medium != 0) throw Error(scene.path + ": an environment light cannot shine through the scene-wide medium");
             l.kind = LIGHT_ENVIRONMENT;
             l.emission = float4_of(desc.color);
             float mean = 1.0f;  // mean luminance of the map

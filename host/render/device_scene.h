@@ -26,6 +26,7 @@ struct DeviceScene {
     std::vector<TriangleUV> uvs;          // BVH order; empty without textures
     std::vector<TextureInfo> textures;
     std::vector<uint32_t> texels;
+    std::vector<Medium> media;            // referenced as 1 + index by materials and lights
     Camera camera{};
     SceneInfo info{};
     double bvh_build_seconds = 0;

@@ -45,10 +45,12 @@ std::vector<std::string> kernel_defines(const DeviceScene& scene, Integrator int
         environment |= l.kind == LIGHT_ENVIRONMENT;
     }
     bool glossy = false, mirror = false, glass = false;
+    bool media = !scene.media.empty();
     for (const Material& m : scene.materials) {
         glossy |= m.kind == MATERIAL_GLOSSY;
         mirror |= m.kind == MATERIAL_MIRROR;
         glass |= m.kind == MATERIAL_GLASS;
+        media |= m.kind == MATERIAL_INTERFACE;
     }
     bool textures = !scene.textures.empty();
     bool cutouts = false, bump_maps = false, emission_textures = false;
@@ -88,6 +90,9 @@ std::vector<std::string> kernel_defines(const DeviceScene& scene, Integrator int
     if (bump_maps) d.push_back("HAS_BUMP_MAPS");
     if (emission_textures) d.push_back("HAS_EMISSION_TEXTURES");
     flag(thin_lens, "HAS_THIN_LENS");
+    // Media change the sample draws' table (cl/sample_dimensions.h): off in "all features"
+    // builds too, so their images stay those of the scene's own build.
+    if (media) d.push_back("HAS_MEDIA");
     return d;
 }
 

@@ -22,7 +22,8 @@ SceneBuffers::SceneBuffers(cl::Context& context, const DeviceScene& scene) : sce
                 upload(context, scene.normals),   upload(context, scene.materials), upload(context, scene.lights),
                 upload(context, scene.light_cdf), upload(context, scene.env_texels),
                 upload(context, scene.env_distribution), upload(context, scene.uvs),
-                upload(context, scene.textures),  upload(context, scene.texels)};
+                upload(context, scene.textures),  upload(context, scene.texels),
+                upload(context, scene.media)};
 }
 
 void SceneBuffers::set_args(cl::Kernel& kernel) const {

@@ -68,6 +68,14 @@ constexpr const char* kDefaultMaterialName = "default";
 
 bool is_emissive(const Material& m);
 
+// ---- medium_boundaries.cpp ---------------------------------------------------------------
+
+// Every glass or interface material with different media on its two sides must enclose its
+// interior: its triangles form closed surfaces, each edge shared by two of them with opposite
+// directions (a consistent winding, so the interior is one side). Throws naming the material
+// and the number of open edges; `file` is the scene file that assigned the media.
+void check_medium_boundaries(const Scene& scene, const std::string& file);
+
 // ---- mtl_textures.cpp --------------------------------------------------------------------
 
 // Where an MTL's texture reference `name` points, relative to `base_dir` (backslashes, "./"

@@ -43,6 +43,15 @@ struct EnvironmentMap {
     std::vector<float> rgb;  // width * height * 3
 };
 
+// A homogeneous participating medium from the scene file's "media" (cl/medium.h): coefficients
+// per scene unit, per RGB channel, and the Henyey-Greenstein asymmetry g.
+struct MediumDesc {
+    std::string name;
+    Vec3 sigma_a;
+    Vec3 sigma_s;
+    float g = 0.0f;
+};
+
 struct RenderSettings {
     int spp = 16;
     int max_depth = 5;
@@ -71,6 +80,12 @@ struct Scene {
 
     std::vector<LightDesc> lights;
     EnvironmentMap environment_map;  // filled if an environment light names a map
+
+    // Participating media. Materials refer to them as 1 + index (Material.interior_medium,
+    // exterior_medium; 0 = vacuum); scene_medium (same convention) fills the space outside every
+    // closed mesh, the camera's unless it is inside one.
+    std::vector<MediumDesc> media;
+    int scene_medium = 0;
 
     bool camera_is_automatic = true;    // no camera given: framed from the bounds (may be refined
                                         // once the BVH exists, see choose_automatic_view)

@@ -284,6 +284,66 @@ LightDesc read_light(const SceneJsonReader& r, const json& value, const std::str
     return light;
 }
 
+// "media": {"fog": {"sigma_a": [r, g, b], "sigma_s": [r, g, b], "g": 0.3}, ...}
+std::vector<MediumDesc> read_media(const SceneJsonReader& r, const json& section) {
+    r.object(section, "media");
+    std::vector<MediumDesc> media;
+    for (auto it = section.begin(); it != section.end(); ++it) {
+        const std::string key = "media." + it.key();
+        const json& value = r.object(it.value(), key);
+        r.check_keys(value, key, {"sigma_a", "sigma_s", "g"});
+        MediumDesc m;
+        m.name = it.key();
+        if (m.name.empty()) r.fail(key, "needs a name");
+        if (value.contains("sigma_a")) m.sigma_a = r.color(value["sigma_a"], key + ".sigma_a");
+        if (value.contains("sigma_s")) m.sigma_s = r.color(value["sigma_s"], key + ".sigma_s");
+        if (value.contains("g")) m.g = r.number_in(value["g"], key + ".g", -1.0f, true, 1.0f, true, "between -1 and 1 (exclusive)");
+        media.push_back(m);
+    }
+    return media;
+}
+
+// 1 + the index of the medium `name` names (0 for "vacuum").
+int medium_reference(const SceneJsonReader& r, const std::vector<MediumDesc>& media, const json& value,
+                     const std::string& key) {
+    const std::string name = r.string(value, key);
+    if (name == "vacuum") return 0;
+    for (size_t i = 0; i < media.size(); ++i)
+        if (media[i].name == name) return int(i) + 1;
+    r.fail(key, "names no medium of \"media\" (got \"" + name + "\")");
+}
+
+// "materials": {"MTL name": {"interface": true, "interior": "smoke", "exterior": "fog"}}: the
+// media on either side of every material of that name, and whether it is only a boundary
+// between media. Both sides default to the scene-wide medium (so a single glass pane, an open
+// surface, is fog on both sides in a foggy scene; "vacuum" names no medium).
+void apply_material_media(const SceneJsonReader& r, const json* section, Scene& scene) {
+    for (Material& m : scene.materials) m.interior_medium = m.exterior_medium = scene.scene_medium;
+    if (section) {
+        for (auto it = section->begin(); it != section->end(); ++it) {
+            const std::string key = "materials." + it.key();
+            const json& value = r.object(it.value(), key);
+            r.check_keys(value, key, {"interface", "interior", "exterior"});
+            bool any = false;
+            for (size_t i = 0; i < scene.materials.size(); ++i) {
+                if (scene.material_names[i] != it.key()) continue;
+                any = true;
+                Material& m = scene.materials[i];
+                if (value.contains("interface")) {
+                    if (!value["interface"].is_boolean()) r.fail(key + ".interface", "must be true or false");
+                    if (value["interface"].get<bool>()) {
+                        if (is_emissive(m)) r.fail(key + ".interface", "cannot be set on an emissive material (Ke)");
+                        m.kind = MATERIAL_INTERFACE;
+                    }
+                }
+                if (value.contains("interior")) m.interior_medium = medium_reference(r, scene.media, value["interior"], key + ".interior");
+                if (value.contains("exterior")) m.exterior_medium = medium_reference(r, scene.media, value["exterior"], key + ".exterior");
+            }
+            if (!any) r.fail(key, "names no material of the meshes");
+        }
+    }
+}
+
 void load_environment_map(Scene& scene, const LightDesc& light, const std::string& shown_path) {
     require_readable_file(light.map_path, shown_path, scene.path);
     EnvironmentMap& env = scene.environment_map;
@@ -334,7 +394,7 @@ void load_json_scene(Scene& scene, const std::string& path) {
     const SceneJsonReader r(path);
     const fs::path scene_dir = fs::path(path).parent_path();
     if (!root.is_object()) throw Error(path + ": the top level must be a JSON object");
-    r.check_keys(root, "", {"camera", "film", "meshes", "lights", "render"});
+    r.check_keys(root, "", {"camera", "film", "meshes", "lights", "render", "media", "medium", "materials"});
 
     // Everything in the file is checked before any mesh is read, so a typo fails fast.
     CameraSection camera;
@@ -387,6 +447,20 @@ void load_json_scene(Scene& scene, const std::string& path) {
         }
     }
 
+    if (root.contains("media")) scene.media = read_media(r, root["media"]);
+    if (root.contains("medium")) scene.scene_medium = medium_reference(r, scene.media, root["medium"], "medium");
+    if (root.contains("materials")) r.object(root["materials"], "materials");
+    if (scene.scene_medium != 0) {
+        for (size_t i = 0; i < scene.lights.size(); ++i) {
+            const LightDesc::Kind kind = scene.lights[i].kind;
+            if (kind == LightDesc::Kind::Environment || kind == LightDesc::Kind::Directional) {
+                r.fail("lights[" + std::to_string(i) + "]",
+                       "is infinitely far: it cannot shine through the scene-wide \"medium\" (put the medium inside "
+                       "a closed mesh of an \"interface\" material instead)");
+            }
+        }
+    }
+
     MeshLoadContext context;
     for (const std::string& name : mesh_names) {
         const fs::path resolved = scene_dir / name;
@@ -397,6 +471,8 @@ void load_json_scene(Scene& scene, const std::string& path) {
     for (size_t i = 0; i < scene.lights.size(); ++i) {
         if (!scene.lights[i].map_path.empty()) load_environment_map(scene, scene.lights[i], map_shown_paths[i]);
     }
+    apply_material_media(r, root.contains("materials") ? &root["materials"] : nullptr, scene);
+    check_medium_boundaries(scene, path);
 
     // The camera: framed on the bounds, then overridden by whatever the file says.
     const float fov = camera.fov.value_or(CameraDesc{}.fov_degrees);

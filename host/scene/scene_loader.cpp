@@ -79,7 +79,8 @@ Scene load_scene(const std::string& path, const LoadOptions& options) {
         throw Error(path + ": unknown scene format '" + ext + "' (expected .json or .obj)");
     }
     if (scene.lights.empty() && !detail::has_emissive_triangle(scene)) {
-        if (options.default_light) {
+        // An environment cannot shine through a scene-wide medium (scene_json.cpp).
+        if (options.default_light && scene.scene_medium == 0) {
             LightDesc sky;
             sky.kind = LightDesc::Kind::Environment;
             sky.color = Vec3(1, 1, 1);

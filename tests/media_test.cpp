@@ -1,0 +1,267 @@
+// Participating media (cl/medium.h): closed forms and agreement between estimators.
+//   - Beer-Lambert: an emitter seen through an absorbing slab behind index-matched boundaries
+//     has exactly Le exp(-sigma_a d) per channel, for bdpt, pt and lt;
+//   - volumetric furnace: the camera at the centre of a non-absorbing ball (an index-matched
+//     sphere) under a uniform white environment sees exactly the probability that a walk from
+//     the centre leaves the ball within the maximum depth's number of scatterings, computed
+//     here by an independent host simulation (1 at small optical thickness, less at 10: the
+//     depth truncation, which this measures rather than hides);
+//   - bdpt = pt = lt on a fog-filled room lit by its ceiling, a scattering ball behind an
+//     index-matched boundary, a spot light shining into fog; bdpt = pt on a glass sphere with an
+//     absorbing, scattering interior (lt cannot see through glass);
+//   - a scene without media compiles without HAS_MEDIA (its speed is measured by
+//     scripts/bench_media.sh, not here).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <array>
+#include <random>
+
+#include "render/features.h"
+#include "test_scenes.h"
+
+namespace clbdpt::test {
+namespace {
+
+// Tolerance as in hard_cases_test.cpp: 4.5 combined standard errors over 17 values per
+// comparison (about 15 comparisons here: a correct renderer fails one with probability ~2e-3;
+// the seeds are fixed, so a pass stays a pass).
+constexpr double kSigmas = 4.5;
+constexpr int kBlocks = 4;
+constexpr int kFilm = 32;
+constexpr double kPi = 3.14159265358979323846;
+
+RegionStats render(const DeviceScene& scene, Integrator integrator, int depth, uint32_t seed, int passes,
+                   const std::string& what, int blocks = kBlocks) {
+    return render_stats_or_fail(scene, make_options(integrator, depth, seed), scaled_passes(passes), blocks, what);
+}
+
+// ---- Closed forms ---------------------------------------------------------------------------
+
+// An emitter facing the camera 3 units away, a slab of thickness 0.5 in between (an
+// index-matched box holding an absorbing medium, sigma_a per channel). The camera's field of
+// view is 4 degrees, so every ray crosses the slab within 0.1% of its thickness
+// (1/cos(2 deg) - 1 = 6e-4, below 0.2% of the attenuation's logarithm): each channel is
+// Le_c exp(-sigma_c 0.5) (1 + O(3e-4)). The emitter (0.22 wide) just fills the view (0.21
+// wide at its distance), so the light tracer's points on it mostly land on the film.
+TEST(Media, BeerLambertThroughAnAbsorbingSlab) {
+    const Vec3 le{2.0f, 1.0f, 0.5f};
+    const Vec3 sigma{0.4f, 1.0f, 2.0f};
+    SceneBuilder b;
+    int absorber = add_medium(b.scene, "ink", sigma, {0, 0, 0}, 0.0f);
+    int emitter = b.material(diffuse_material({0, 0, 0}, le), "panel");
+    int slab = b.material(interface_material(absorber), "slab");
+    const float h = 0.11f;
+    b.quad({-h, -h, 3}, {-h, h, 3}, {h, h, 3}, {h, -h, 3}, emitter);  // facing -z, toward the camera
+    b.box({-1.5f, -1.5f, 1.0f}, {1.5f, 1.5f, 1.5f}, /*inward=*/false, slab);
+    b.camera({0, 0, 0}, {0, 0, 1}, 4.0f);
+    DeviceScene scene = build_device_scene(b.scene, 16, 16);
+    double expected = 0;
+    for (int c = 0; c < 3; ++c) expected += le[c] * std::exp(-double(sigma[c]) * 0.5) / 3.0;
+    for (Integrator integrator : {Integrator::Bdpt, Integrator::Pt, Integrator::Lt}) {
+        std::string name = integrator_name(integrator);
+        RegionStats r = render(scene, integrator, 2, 301, 16, "slab " + name);
+        // Floor: the 6e-4 of the slant, plus float rounding.
+        expect_matches(r, expected, kSigmas, "Beer-Lambert " + name, 1e-3);
+    }
+}
+
+// The probability that a walk from the centre of a ball of optical radius tau (no absorption,
+// Henyey-Greenstein g) leaves it after at most max_depth scatterings: an independent
+// simulation, `walks` walks; *std_error receives its standard error.
+double escape_probability(double tau, double g, int max_depth, int walks, double* std_error) {
+    std::mt19937_64 rng(12345);
+    std::uniform_real_distribution<double> uniform(0.0, 1.0);
+    auto random_direction = [&]() {
+        double z = 1 - 2 * uniform(rng), phi = 2 * kPi * uniform(rng), r = std::sqrt(std::max(0.0, 1 - z * z));
+        return std::array<double, 3>{r * std::cos(phi), r * std::sin(phi), z};
+    };
+    int escaped = 0;
+    for (int w = 0; w < walks; ++w) {
+        std::array<double, 3> p{0, 0, 0}, d = random_direction();
+        for (int k = 0;; ++k) {
+            double t = -std::log(1 - uniform(rng)) / tau;  // the ball has radius 1
+            for (int i = 0; i < 3; ++i) p[i] += t * d[i];
+            if (p[0] * p[0] + p[1] * p[1] + p[2] * p[2] >= 1) {
+                escaped += k <= max_depth;
+                break;
+            }
+            if (k == max_depth) break;
+            // Henyey-Greenstein: cos theta from straight on, then a uniform azimuth.
+            double cos_theta;
+            if (std::fabs(g) < 1e-3) {
+                cos_theta = 1 - 2 * uniform(rng);
+            } else {
+                double sq = (1 - g * g) / (1 - g + 2 * g * uniform(rng));
+                cos_theta = (1 + g * g - sq * sq) / (2 * g);
+            }
+            std::array<double, 3> a = std::fabs(d[0]) < 0.9 ? std::array<double, 3>{1, 0, 0} : std::array<double, 3>{0, 1, 0};
+            std::array<double, 3> s{a[1] * d[2] - a[2] * d[1], a[2] * d[0] - a[0] * d[2], a[0] * d[1] - a[1] * d[0]};
+            double sl = std::sqrt(s[0] * s[0] + s[1] * s[1] + s[2] * s[2]);
+            for (double& x : s) x /= sl;
+            std::array<double, 3> u{d[1] * s[2] - d[2] * s[1], d[2] * s[0] - d[0] * s[2], d[0] * s[1] - d[1] * s[0]};
+            double sin_theta = std::sqrt(std::max(0.0, 1 - cos_theta * cos_theta)), phi = 2 * kPi * uniform(rng);
+            for (int i = 0; i < 3; ++i)
+                d[i] = cos_theta * d[i] + sin_theta * (std::cos(phi) * s[i] + std::sin(phi) * u[i]);
+        }
+    }
+    double pr = double(escaped) / walks;
+    *std_error = std::sqrt(std::max(pr * (1 - pr), 1.0 / walks) / walks);
+    return pr;
+}
+
+struct FurnaceCase {
+    double tau;
+    float g;
+};
+
+class VolumetricFurnaceTest : public ::testing::TestWithParam<FurnaceCase> {};
+
+// The camera at the centre of a ball of radius 1 (an index-matched icosphere of 5120
+// triangles, within 0.1% of the sphere) holding a white medium of extinction tau, under a
+// uniform environment of radiance 1: every pixel is the escape probability within the depth.
+TEST_P(VolumetricFurnaceTest, EveryPixelIsTheEscapeProbability) {
+    const FurnaceCase c = GetParam();
+    const int depth = 12;
+    SceneBuilder b;
+    const float sigma = float(c.tau);
+    int white = add_medium(b.scene, "white", {0, 0, 0}, {sigma, sigma, sigma}, c.g);
+    int ball = b.material(interface_material(white), "ball");
+    b.sphere({0, 0, 0}, 1.0f, 4, /*inward=*/false, ball);
+    b.camera({0, 0, 0}, {0.3f, 0.2f, 1}, 90.0f);
+    add_environment(b.scene, {1, 1, 1});
+    // 2 x 2 regions of 256 pixels: a sample's value is skewed (at tau 0.1 nine in ten are 1
+    // exactly, a few in a hundred near 1.4; at tau 10 most are near 0), so each region's pass
+    // mean needs hundreds of samples for its spread over the passes to estimate the standard
+    // error (with 16-pixel regions a region that drew none of the rare values read 8 of its
+    // underestimated standard errors low).
+    DeviceScene scene = build_device_scene(b.scene, kFilm, kFilm);
+    ASSERT_EQ(scene.info.camera_medium, white);  // found inside the ball by the host's probe
+    double se = 0;
+    const double expected = escape_probability(c.tau, c.g, depth, 1 << 21, &se);
+    if (c.tau <= 1) EXPECT_GT(expected, 0.999) << "at this thickness the truncation is negligible";
+    // No lt: most of the image is the environment seen straight through the ball, which only
+    // a camera ray can find (a light subpath cannot connect to a point at infinity).
+    for (Integrator integrator : {Integrator::Bdpt, Integrator::Pt}) {
+        std::string name = integrator_name(integrator);
+        RegionStats r = render(scene, integrator, depth, 311 + uint32_t(integrator), 32, "furnace " + name, 2);
+        // The simulation's own standard error joins the render's through the floor.
+        expect_matches(r, expected, kSigmas, "volumetric furnace tau " + std::to_string(c.tau) + " " + name,
+                       se / expected + 1e-5);
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(Thickness, VolumetricFurnaceTest,
+                         ::testing::Values(FurnaceCase{0.1, 0.0f}, FurnaceCase{1.0, 0.6f}, FurnaceCase{10.0, -0.3f}),
+                         [](const ::testing::TestParamInfo<FurnaceCase>& info) {
+                             return "tau_" + std::to_string(int(info.param.tau * 10)) + "_tenths";
+                         });
+
+// ---- Agreement ----------------------------------------------------------------------------
+
+// The room of test_scenes.h filled with chromatic fog (optical depth about 0.3 to 0.6 across
+// the room), lit by its ceiling.
+TEST(Media, FogFilledRoomAllEstimatorsAgree) {
+    SceneBuilder b;
+    RoomMaterials m = room_materials(b);
+    room_walls(b, m);
+    ceiling_light(b, {0, 1.999f, 0.2f}, 0.5f, m.light);
+    room_camera(b);
+    fill_with(b.scene, add_medium(b.scene, "fog", {0.05f, 0.05f, 0.1f}, {0.1f, 0.2f, 0.2f}, 0.4f));
+    DeviceScene scene = build_device_scene(b.scene, kFilm, kFilm);
+    ASSERT_NE(scene.info.camera_medium, 0);
+    RegionStats bdpt = render(scene, Integrator::Bdpt, 5, 321, 64, "fog bdpt");
+    RegionStats pt = render(scene, Integrator::Pt, 5, 322, 64, "fog pt");
+    RegionStats lt = render(scene, Integrator::Lt, 5, 323, 64, "fog lt");
+    ASSERT_GT(bdpt.image_mean, 0.01);
+    expect_agree(pt, bdpt, kSigmas, "fog pt vs bdpt");
+    expect_agree(lt, bdpt, kSigmas, "fog lt vs bdpt");
+}
+
+// A dense scattering ball (optical radius 3, forward scattering) behind an index-matched
+// boundary, standing in the vacuum of the room.
+TEST(Media, ScatteringBallBehindAnInterfaceAllEstimatorsAgree) {
+    SceneBuilder b;
+    RoomMaterials m = room_materials(b);
+    room_walls(b, m, /*with_block=*/false);
+    ceiling_light(b, {0, 1.999f, 0.2f}, 0.5f, m.light);
+    room_camera(b);
+    int cloud = add_medium(b.scene, "cloud", {0.5f, 1.0f, 1.5f}, {7.0f, 7.0f, 6.0f}, 0.5f);
+    b.sphere({-0.2f, 0.5f, 0.3f}, 0.4f, 3, /*inward=*/false, b.material(interface_material(cloud), "cloud boundary"));
+    DeviceScene scene = build_device_scene(b.scene, kFilm, kFilm);
+    ASSERT_EQ(scene.info.camera_medium, 0);
+    RegionStats bdpt = render(scene, Integrator::Bdpt, 8, 331, 64, "ball bdpt");
+    RegionStats pt = render(scene, Integrator::Pt, 8, 332, 64, "ball pt");
+    RegionStats lt = render(scene, Integrator::Lt, 8, 333, 64, "ball lt");
+    ASSERT_GT(bdpt.image_mean, 0.01);
+    expect_agree(pt, bdpt, kSigmas, "ball pt vs bdpt");
+    expect_agree(lt, bdpt, kSigmas, "ball lt vs bdpt");
+}
+
+// A glass sphere (index 1.5) whose interior absorbs red least and scatters a little: light
+// reaches the inside only by refraction, and the camera sees it only through the glass.
+TEST(Media, GlassWithAnAbsorbingInteriorBdptMatchesPt) {
+    SceneBuilder b;
+    RoomMaterials m = room_materials(b);
+    room_walls(b, m, /*with_block=*/false);
+    ceiling_light(b, {0, 1.999f, 0.2f}, 0.5f, m.light);
+    room_camera(b);
+    int tint = add_medium(b.scene, "tint", {0.5f, 2.0f, 3.0f}, {0.5f, 0.5f, 0.5f}, 0.0f);
+    Material glass = glass_material(1.5f);
+    glass.interior_medium = tint;
+    b.sphere({-0.2f, 0.5f, 0.3f}, 0.4f, 3, /*inward=*/false, b.material(glass, "tinted glass"));
+    DeviceScene scene = build_device_scene(b.scene, kFilm, kFilm);
+    RegionStats bdpt = render(scene, Integrator::Bdpt, 8, 341, 128, "tinted bdpt");
+    RegionStats pt = render(scene, Integrator::Pt, 8, 342, 128, "tinted pt");
+    ASSERT_GT(bdpt.image_mean, 0.01);
+    expect_agree(pt, bdpt, kSigmas, "tinted glass pt vs bdpt");
+}
+
+// A spot light in fog aimed at the floor: a visible cone of light (a light shaft). The light
+// is a delta position inside a medium: its medium comes from the host's probe.
+TEST(Media, SpotLightInFogAllEstimatorsAgree) {
+    SceneBuilder b;
+    RoomMaterials m = room_materials(b);
+    room_walls(b, m);
+    room_camera(b);
+    LightDesc spot;
+    spot.kind = LightDesc::Kind::Spot;
+    spot.position = {0.3f, 1.8f, 0.3f};
+    spot.target = {0.0f, 0.0f, 0.2f};
+    spot.color = {3, 3, 3};
+    spot.cone_angle = 20;
+    spot.cone_delta = 5;
+    b.scene.lights.push_back(spot);
+    int fog = add_medium(b.scene, "fog", {0.1f, 0.1f, 0.1f}, {0.4f, 0.4f, 0.4f}, 0.2f);
+    fill_with(b.scene, fog);
+    DeviceScene scene = build_device_scene(b.scene, kFilm, kFilm);
+    ASSERT_EQ(scene.lights.back().medium, fog);
+    RegionStats bdpt = render(scene, Integrator::Bdpt, 5, 351, 64, "spot fog bdpt");
+    RegionStats pt = render(scene, Integrator::Pt, 5, 352, 64, "spot fog pt");
+    RegionStats lt = render(scene, Integrator::Lt, 5, 353, 64, "spot fog lt");
+    ASSERT_GT(bdpt.image_mean, 0.001);
+    expect_agree(pt, bdpt, kSigmas, "spot fog pt vs bdpt");
+    expect_agree(lt, bdpt, kSigmas, "spot fog lt vs bdpt");
+}
+
+// Media switch on only where used: a scene without media has no HAS_MEDIA, one with only an
+// interface has it.
+TEST(Media, CompiledOnlyWhereUsed) {
+    auto has_media = [](const Scene& s) {
+        DeviceScene ds = build_device_scene(s, 8, 8);
+        for (const std::string& d : kernel_defines(ds, Integrator::Bdpt, 5, false, SamplerKind::Sobol))
+            if (d == "HAS_MEDIA") return true;
+        return false;
+    };
+    EXPECT_FALSE(has_media(room_scene(0.5f)));
+    SceneBuilder b;
+    RoomMaterials m = room_materials(b);
+    room_walls(b, m);
+    ceiling_light(b, {0, 1.999f, 0.2f}, 0.5f, m.light);
+    room_camera(b);
+    b.box({0.2f, 0.2f, 0.2f}, {0.4f, 0.4f, 0.4f}, false, b.material(interface_material(0), "nothing"));
+    EXPECT_TRUE(has_media(b.scene));
+}
+
+}  // namespace
+}  // namespace clbdpt::test
