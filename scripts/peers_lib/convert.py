@@ -276,6 +276,22 @@ def convert(scene_json, out_dir, width, height):
                                    "emission": mat["ke"] if emissive else None})
     desc["bounds"] = [lo, hi]
 
+    # Participating media (README "Participating media"): named media, the scene-wide one,
+    # and per material the media on either side (both default to the scene-wide one).
+    media = js.get("media", {})
+    desc["media"] = {name: {"sigma_a": m.get("sigma_a", [0, 0, 0]), "sigma_s": m.get("sigma_s", [0, 0, 0]),
+                            "g": m.get("g", 0.0)} for name, m in media.items()}
+    desc["medium"] = js.get("medium")
+    overrides = js.get("materials", {})
+    for shape in desc["shapes"]:
+        o = overrides.get(shape["material"].get("name"), {})
+        shape["interior"] = o.get("interior", desc["medium"])
+        shape["exterior"] = o.get("exterior", desc["medium"])
+        shape["interface"] = bool(o.get("interface", False))
+        for side in ("interior", "exterior"):
+            if shape[side] == "vacuum":
+                shape[side] = None
+
     for light in js.get("lights", []):
         t = light["type"]
         if t == "point":

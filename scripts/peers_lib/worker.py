@@ -118,12 +118,27 @@ def mitsuba_scene(mi, desc, spp, seed, max_depth_offset=1):
         sensor["aperture_radius"] = float(c["lens_radius"])
         sensor["focus_distance"] = float(c["focus_distance"])
     depth = desc["max_depth"] + max_depth_offset  # Mitsuba counts the emitter vertex too
+    media = desc.get("media") or {}
     scene = {"type": "scene", "sensor": sensor,
              # no Russian roulette, as clbdpt (rr_depth past max_depth never triggers)
-             "integrator": {"type": "path", "max_depth": depth, "rr_depth": depth + 1}}
+             "integrator": {"type": "volpath" if media else "path", "max_depth": depth, "rr_depth": depth + 1}}
+    for name, m in media.items():
+        sigma_t = [a + b for a, b in zip(m["sigma_a"], m["sigma_s"])]
+        albedo = [b / t if t > 0 else 0.0 for b, t in zip(m["sigma_s"], sigma_t)]
+        scene["medium_" + name] = {"type": "homogeneous", "scale": 1.0,
+                                   "sigma_t": {"type": "rgb", "value": sigma_t},
+                                   "albedo": {"type": "rgb", "value": albedo},
+                                   "phase": {"type": "hg", "g": float(m["g"])}}
+    if desc.get("medium"):
+        # clbdpt finds the camera's medium with a probe ray; the peers' scenes keep the camera
+        # in the scene-wide medium.
+        sensor["medium"] = {"type": "ref", "id": "medium_" + desc["medium"]}
     for s in desc["shapes"]:
         shape = {"type": "ply", "filename": s["ply"], "face_normals": not s["normals"],
-                 "bsdf": mitsuba_bsdf(s["material"])}
+                 "bsdf": {"type": "null"} if s.get("interface") else mitsuba_bsdf(s["material"])}
+        for side in ("interior", "exterior"):
+            if s.get(side):
+                shape[side] = {"type": "ref", "id": "medium_" + s[side]}
         if s["emission"]:
             shape["emitter"] = {"type": "area", "radiance": {"type": "rgb", "value": s["emission"]}}
         scene[s["name"]] = shape
