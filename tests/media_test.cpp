@@ -159,62 +159,53 @@ INSTANTIATE_TEST_SUITE_P(Thickness, VolumetricFurnaceTest,
 
 // ---- Agreement ----------------------------------------------------------------------------
 
+// bdpt, pt and (unless the camera sees the scene only through glass) lt agree on `scene`, whose
+// image mean is above min_mean; seeds seed, seed + 1, seed + 2.
+void expect_estimators_agree(const DeviceScene& scene, int depth, uint32_t seed, int passes, const std::string& name,
+                             bool with_lt = true, double min_mean = 0.01) {
+    RegionStats bdpt = render(scene, Integrator::Bdpt, depth, seed, passes, name + " bdpt");
+    RegionStats pt = render(scene, Integrator::Pt, depth, seed + 1, passes, name + " pt");
+    ASSERT_GT(bdpt.image_mean, min_mean) << name;
+    expect_agree(pt, bdpt, kSigmas, name + " pt vs bdpt");
+    if (!with_lt) return;
+    RegionStats lt = render(scene, Integrator::Lt, depth, seed + 2, passes, name + " lt");
+    expect_agree(lt, bdpt, kSigmas, name + " lt vs bdpt");
+}
+
 // The room of test_scenes.h filled with chromatic fog (optical depth about 0.3 to 0.6 across
 // the room), lit by its ceiling.
 TEST(Media, FogFilledRoomAllEstimatorsAgree) {
     SceneBuilder b;
-    RoomMaterials m = room_materials(b);
-    room_walls(b, m);
-    ceiling_light(b, {0, 1.999f, 0.2f}, 0.5f, m.light);
-    room_camera(b);
+    lit_room(b);
     fill_with(b.scene, add_medium(b.scene, "fog", {0.05f, 0.05f, 0.1f}, {0.1f, 0.2f, 0.2f}, 0.4f));
     DeviceScene scene = build_device_scene(b.scene, kFilm, kFilm);
     ASSERT_NE(scene.info.camera_medium, 0);
-    RegionStats bdpt = render(scene, Integrator::Bdpt, 5, 321, 64, "fog bdpt");
-    RegionStats pt = render(scene, Integrator::Pt, 5, 322, 64, "fog pt");
-    RegionStats lt = render(scene, Integrator::Lt, 5, 323, 64, "fog lt");
-    ASSERT_GT(bdpt.image_mean, 0.01);
-    expect_agree(pt, bdpt, kSigmas, "fog pt vs bdpt");
-    expect_agree(lt, bdpt, kSigmas, "fog lt vs bdpt");
+    expect_estimators_agree(scene, 5, 321, 64, "fog");
 }
 
 // A dense scattering ball (optical radius 3, forward scattering) behind an index-matched
 // boundary, standing in the vacuum of the room.
 TEST(Media, ScatteringBallBehindAnInterfaceAllEstimatorsAgree) {
     SceneBuilder b;
-    RoomMaterials m = room_materials(b);
-    room_walls(b, m, /*with_block=*/false);
-    ceiling_light(b, {0, 1.999f, 0.2f}, 0.5f, m.light);
-    room_camera(b);
+    lit_room(b, /*with_block=*/false);
     int cloud = add_medium(b.scene, "cloud", {0.5f, 1.0f, 1.5f}, {7.0f, 7.0f, 6.0f}, 0.5f);
     b.sphere({-0.2f, 0.5f, 0.3f}, 0.4f, 3, /*inward=*/false, b.material(interface_material(cloud), "cloud boundary"));
     DeviceScene scene = build_device_scene(b.scene, kFilm, kFilm);
     ASSERT_EQ(scene.info.camera_medium, 0);
-    RegionStats bdpt = render(scene, Integrator::Bdpt, 8, 331, 64, "ball bdpt");
-    RegionStats pt = render(scene, Integrator::Pt, 8, 332, 64, "ball pt");
-    RegionStats lt = render(scene, Integrator::Lt, 8, 333, 64, "ball lt");
-    ASSERT_GT(bdpt.image_mean, 0.01);
-    expect_agree(pt, bdpt, kSigmas, "ball pt vs bdpt");
-    expect_agree(lt, bdpt, kSigmas, "ball lt vs bdpt");
+    expect_estimators_agree(scene, 8, 331, 64, "ball");
 }
 
 // A glass sphere (index 1.5) whose interior absorbs red least and scatters a little: light
 // reaches the inside only by refraction, and the camera sees it only through the glass.
 TEST(Media, GlassWithAnAbsorbingInteriorBdptMatchesPt) {
     SceneBuilder b;
-    RoomMaterials m = room_materials(b);
-    room_walls(b, m, /*with_block=*/false);
-    ceiling_light(b, {0, 1.999f, 0.2f}, 0.5f, m.light);
-    room_camera(b);
+    lit_room(b, /*with_block=*/false);
     int tint = add_medium(b.scene, "tint", {0.5f, 2.0f, 3.0f}, {0.5f, 0.5f, 0.5f}, 0.0f);
     Material glass = glass_material(1.5f);
     glass.interior_medium = tint;
     b.sphere({-0.2f, 0.5f, 0.3f}, 0.4f, 3, /*inward=*/false, b.material(glass, "tinted glass"));
     DeviceScene scene = build_device_scene(b.scene, kFilm, kFilm);
-    RegionStats bdpt = render(scene, Integrator::Bdpt, 8, 341, 128, "tinted bdpt");
-    RegionStats pt = render(scene, Integrator::Pt, 8, 342, 128, "tinted pt");
-    ASSERT_GT(bdpt.image_mean, 0.01);
-    expect_agree(pt, bdpt, kSigmas, "tinted glass pt vs bdpt");
+    expect_estimators_agree(scene, 8, 341, 128, "tinted glass", /*with_lt=*/false);
 }
 
 // A spot light in fog aimed at the floor: a visible cone of light (a light shaft). The light
@@ -236,12 +227,7 @@ TEST(Media, SpotLightInFogAllEstimatorsAgree) {
     fill_with(b.scene, fog);
     DeviceScene scene = build_device_scene(b.scene, kFilm, kFilm);
     ASSERT_EQ(scene.lights.back().medium, fog);
-    RegionStats bdpt = render(scene, Integrator::Bdpt, 5, 351, 64, "spot fog bdpt");
-    RegionStats pt = render(scene, Integrator::Pt, 5, 352, 64, "spot fog pt");
-    RegionStats lt = render(scene, Integrator::Lt, 5, 353, 64, "spot fog lt");
-    ASSERT_GT(bdpt.image_mean, 0.001);
-    expect_agree(pt, bdpt, kSigmas, "spot fog pt vs bdpt");
-    expect_agree(lt, bdpt, kSigmas, "spot fog lt vs bdpt");
+    expect_estimators_agree(scene, 5, 351, 64, "spot fog", /*with_lt=*/true, /*min_mean=*/0.001);
 }
 
 // Media switch on only where used: a scene without media has no HAS_MEDIA, one with only an
@@ -255,10 +241,7 @@ TEST(Media, CompiledOnlyWhereUsed) {
     };
     EXPECT_FALSE(has_media(room_scene(0.5f)));
     SceneBuilder b;
-    RoomMaterials m = room_materials(b);
-    room_walls(b, m);
-    ceiling_light(b, {0, 1.999f, 0.2f}, 0.5f, m.light);
-    room_camera(b);
+    lit_room(b);
     b.box({0.2f, 0.2f, 0.2f}, {0.4f, 0.4f, 0.4f}, false, b.material(interface_material(0), "nothing"));
     EXPECT_TRUE(has_media(b.scene));
 }

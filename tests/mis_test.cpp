@@ -89,19 +89,13 @@ TEST(MisWeights, SumToOneLampCeiling) { check_scene("lamp-ceiling", 6, 20); }
 TEST(MisWeights, SumToOneInMedia) {
     {
         SceneBuilder b;
-        RoomMaterials m = room_materials(b);
-        room_walls(b, m);
-        ceiling_light(b, {0, 1.999f, 0.2f}, 0.5f, m.light);
-        room_camera(b);
+        lit_room(b);
         fill_with(b.scene, add_medium(b.scene, "fog", {0.05f, 0.05f, 0.1f}, {0.5f, 0.6f, 0.7f}, 0.4f));
         check_scene(b.scene, "fog-filled room", 5);
     }
     {
         SceneBuilder b;
-        RoomMaterials m = room_materials(b);
-        room_walls(b, m, /*with_block=*/false);
-        ceiling_light(b, {0, 1.999f, 0.2f}, 0.5f, m.light);
-        room_camera(b);
+        lit_room(b, /*with_block=*/false);
         int cloud = add_medium(b.scene, "cloud", {0.5f, 1.0f, 1.5f}, {4.0f, 4.0f, 3.0f}, -0.3f);
         b.sphere({-0.4f, 0.5f, 0.3f}, 0.35f, 2, /*inward=*/false, b.material(interface_material(cloud), "cloud"));
         Material glass = glass_material(1.5f);

@@ -227,6 +227,14 @@ inline void ceiling_light(SceneBuilder& b, Vec3 c, float side, int material) {
 
 inline void room_camera(SceneBuilder& b) { b.camera({0, 1, -0.95f}, {0, 0.6f, 1}, 60.0f); }
 
+// The room with its walls (and block), its ceiling light and its camera.
+inline void lit_room(SceneBuilder& b, bool with_block = true) {
+    RoomMaterials m = room_materials(b);
+    room_walls(b, m, with_block);
+    ceiling_light(b, {0, 1.999f, 0.2f}, 0.5f, m.light);
+    room_camera(b);
+}
+
 inline Scene room_scene(float light_side) {
     SceneBuilder b;
     RoomMaterials m = room_materials(b, 12.0f, light_side);
