@@ -19,20 +19,18 @@
 
 /* Multiplies a connection's contribution by the visibility of the segment between a and b, or,
  * with media, by its transmittance; then *to_a and *to_b receive the distance-sampling densities
- * of the segment toward each end for the MIS (cl/medium.h; 1 without media). Forced inline:
- * as a call, bdpt on point-spot measured 2% slower on PoCL (medians of 6, at the edge of the
- * run-to-run noise). */
-__attribute__((always_inline)) inline float3 connection_visibility(const SceneData* scene, const PathVertex* a,
-                                                                   const PathVertex* b, float3 L, float* to_a,
-                                                                   float* to_b) {
+ * of the segment toward each end for the MIS (cl/medium.h; 1 without media). The connection
+ * (s, t) numbers its own random stream for grid media. Forced inline: as a call, bdpt on
+ * point-spot measured 2% slower on PoCL (medians of 6, at the edge of the run-to-run noise). */
+__attribute__((always_inline)) inline float3 connection_visibility(const SceneData* scene, const Rng* rng, int s,
+                                                                   int t, const PathVertex* a, const PathVertex* b,
+                                                                   float3 L, float* to_a, float* to_b) {
     *to_a = 1.0f;
     *to_b = 1.0f;
     if (is_black(L)) return L;
 #ifdef HAS_MEDIA
-    float3 tr = vertices_transmittance(scene, a, b);
-    *to_a = segment_distance_density(scene, tr, a);
-    *to_b = segment_distance_density(scene, tr, b);
-    return L * tr;
+    uint stream = 0x80000000u | ((uint)s << 12) | (uint)t;
+    return L * vertices_transmittance(scene, rng, stream, a, b, to_a, to_b);
 #else
     return vertices_visible(scene, a, b) ? L : (float3)(0.0f);
 #endif
@@ -65,7 +63,7 @@ inline float3 connect_bdpt(const SceneData* scene, const StrategyMix* mix, Rng* 
             sampled.beta = (float3)(we / pdf_w);
             L = qs->beta * vertex_f(scene, qs, &sampled, TRANSPORT_IMPORTANCE) * sampled.beta;
             if (vertex_on_surface(qs)) L *= fabs(dot(wi, qs->ns));
-            L = connection_visibility(scene, qs, &sampled, L, &to_qs, &to_pt);
+            L = connection_visibility(scene, rng, s, t, qs, &sampled, L, &to_qs, &to_pt);
         }
     } else if (s == 1) {
         const PathVertex* pt = &camera_path[t - 1];
@@ -83,14 +81,14 @@ inline float3 connect_bdpt(const SceneData* scene, const StrategyMix* mix, Rng* 
             sampled.pdf_fwd = vertex_pdf_light_origin(scene, &sampled, pt);
             L = pt->beta * vertex_f(scene, pt, &sampled, TRANSPORT_RADIANCE) * sampled.beta;
             if (vertex_on_surface(pt)) L *= fabs(dot(ls.wi, pt->ns));
-            L = connection_visibility(scene, pt, &sampled, L, &to_pt, &to_qs);
+            L = connection_visibility(scene, rng, s, t, pt, &sampled, L, &to_pt, &to_qs);
         }
     } else {
         const PathVertex* qs = &light_path[s - 1];
         const PathVertex* pt = &camera_path[t - 1];
         if (vertex_is_connectible(scene, qs) && vertex_is_connectible(scene, pt)) {
             L = qs->beta * vertex_f(scene, qs, pt, TRANSPORT_IMPORTANCE) * vertex_f(scene, pt, qs, TRANSPORT_RADIANCE) * pt->beta;
-            if (!is_black(L)) L = connection_visibility(scene, qs, pt, L * geometry_cosines(qs, pt), &to_qs, &to_pt);
+            if (!is_black(L)) L = connection_visibility(scene, rng, s, t, qs, pt, L * geometry_cosines(qs, pt), &to_qs, &to_pt);
         }
     }
     if (is_black(L)) return L;

@@ -212,4 +212,13 @@ inline float2 rng_next2(Rng* rng) {
 
 #endif
 
+/* Values beyond the sample vector, for decisions whose number has no bound (a ray through a
+ * grid medium meets any number of tentative collisions, cl/medium.h): value k of stream
+ * `stream`, a hash of (seed, pixel, sample, stream, k) whatever the sampler, so still a
+ * function of the sample alone. Stream numbers must not repeat within a sample. */
+inline float rng_stream_value(const Rng* rng, uint stream, uint k) {
+    uint h = hash_u32(rng->key ^ hash_u32(rng->sample_index * 0x9e3779b9u ^ hash_u32(stream + 0x3c6ef372u)));
+    return bits_to_unit_float(hash_u32(h + k * 0x85ebca6bu));
+}
+
 #endif

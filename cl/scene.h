@@ -19,6 +19,7 @@ typedef struct {
     __global const float* env_distribution; /* see lights.h, "Environment map distribution" */
     __global const TriangleUV* uvs;         /* per triangle, in scenes with textures */
     __global const Medium* media;           /* Material and Light medium indices are 1 + index */
+    __global const float* densities;        /* grid media's voxels (Medium.grid_offset) */
     Textures textures;
     Cutouts cutouts; /* what the ray queries need to see holes (cl/cutouts.h) */
     Camera camera;
@@ -34,11 +35,11 @@ typedef struct {
         __global const Light *lights, __global const float *light_cdf, __global const float4 *env_texels, \
         __global const float *env_distribution, __global const TriangleUV *uvs,                         \
         __global const TextureInfo *texture_infos, __global const uint *texels, __global const Medium *media, \
-        Camera camera, SceneInfo info
+        __global const float *densities, Camera camera, SceneInfo info
 
 #define SCENE_DATA_FROM_KERNEL_ARGS(rays)                                                               \
     scene_data(nodes, triangles, infos, normals, materials, lights, light_cdf, env_texels, env_distribution, \
-               uvs, texture_infos, texels, media, camera, info, rays)
+               uvs, texture_infos, texels, media, densities, camera, info, rays)
 
 inline SceneData scene_data(__global const BvhNode* nodes, __global const Triangle* triangles,
                             __global const TriangleInfo* infos, __global const TriangleNormals* normals,
@@ -46,7 +47,8 @@ inline SceneData scene_data(__global const BvhNode* nodes, __global const Triang
                             __global const float* light_cdf, __global const float4* env_texels,
                             __global const float* env_distribution, __global const TriangleUV* uvs,
                             __global const TextureInfo* texture_infos, __global const uint* texels,
-                            __global const Medium* media, Camera camera, SceneInfo info, uint* rays) {
+                            __global const Medium* media, __global const float* densities, Camera camera,
+                            SceneInfo info, uint* rays) {
     SceneData s;
     s.nodes = nodes;
     s.triangles = triangles;
@@ -59,6 +61,7 @@ inline SceneData scene_data(__global const BvhNode* nodes, __global const Triang
     s.env_distribution = env_distribution;
     s.uvs = uvs;
     s.media = media;
+    s.densities = densities;
     s.textures.infos = texture_infos;
     s.textures.texels = texels;
     s.cutouts.infos = infos;

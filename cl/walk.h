@@ -75,9 +75,11 @@ inline int random_walk(const SceneData* scene, Rng* rng, float3 o, float3 d, flo
         PathVertex* vertex = &path[i];
         PathVertex* prev = &path[i - 1];
 #ifdef HAS_MEDIA
-        rng_seek(rng, first_draw + SAMPLE_DRAWS_PER_BOUNCE * (uint)(i - start) + SAMPLE_DRAW_BOUNCE_DISTANCE);
-        float3 tr;
-        int segment = trace_through_media(scene, &o, d, &medium, rng_next2(rng), &hit, &tr);
+        uint distance_draw = first_draw + SAMPLE_DRAWS_PER_BOUNCE * (uint)(i - start) + SAMPLE_DRAW_BOUNCE_DISTANCE;
+        rng_seek(rng, distance_draw);
+        SegmentTally tally;
+        /* The draw's number is unique to this segment: it names its random stream too. */
+        int segment = trace_through_media(scene, rng, distance_draw, &o, d, &medium, rng_next2(rng), &hit, &tally);
         int found = segment != SEGMENT_LOST;
         if (segment == SEGMENT_MEDIUM) {
             *vertex = vertex_at(VERTEX_MEDIUM, o, (float3)(0.0f), 0.0f);
@@ -105,11 +107,11 @@ inline int random_walk(const SceneData* scene, Rng* rng, float3 o, float3 d, flo
         }
 #ifdef HAS_MEDIA
         /* The segment's distance sampling, weighted by its own density (cl/medium.h). */
-        vertex->dist_fwd = segment_distance_density(scene, tr, vertex);
-        vertex->dist_rev = segment_distance_density(scene, tr, prev);
+        vertex->dist_fwd = segment_distance_density(scene, tally.weight, vertex);
+        vertex->dist_rev = segment_distance_density(scene, tally.weight, prev);
         if (vertex->dist_fwd == 0.0f) break;
-        float3 gain = tr / vertex->dist_fwd;
-        if (segment == SEGMENT_MEDIUM) gain *= xyz(scene->media[medium - 1].sigma_s);
+        float3 gain = tally.weight / vertex->dist_fwd;
+        if (segment == SEGMENT_MEDIUM) gain *= medium_sigma_s_at(scene, medium, vertex->p);
         beta *= gain;
 #endif
         vertex->beta = beta;

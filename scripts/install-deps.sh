@@ -8,6 +8,7 @@ packages=(
   build-essential cmake pkg-config
   pocl-opencl-icd ocl-icd-opencl-dev opencl-clhpp-headers opencl-c-headers clinfo
   libopenimageio-dev openimageio-tools libtinyobjloader-dev libcli11-dev nlohmann-json3-dev libgtest-dev
+  libopenvdb-dev libboost-dev
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -20,6 +20,7 @@
         F(Material, cutout_channel) F(Material, bump_texture) F(Material, bump_is_normal_map)     \
         F(Material, bump_scale) F(Material, exterior_medium)                                      \
     S(Medium) F(Medium, sigma_a) F(Medium, sigma_s) F(Medium, sigma_t) F(Medium, g)                \
+        F(Medium, majorant) F(Medium, grid_offset) F(Medium, grid_size) F(Medium, world_to_grid)  \
     S(Light) F(Light, position) F(Light, direction) F(Light, emission) F(Light, kind)             \
         F(Light, triangle) F(Light, one_minus_cos_total) F(Light, one_minus_cos_falloff) F(Light, area)   \
         F(Light, select_pdf) F(Light, medium) F(Light, pad1)                                        \

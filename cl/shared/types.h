@@ -116,14 +116,22 @@ typedef struct {
 
 /* ---- Participating media -------------------------------------------------------------- */
 
-/* A homogeneous medium (cl/medium.h): coefficients per scene unit and RGB channel, and the
- * Henyey-Greenstein asymmetry of its phase function (-1 < g < 1, 0 isotropic). */
+/* A participating medium (cl/medium.h): coefficients per scene unit and RGB channel, and the
+ * Henyey-Greenstein asymmetry of its phase function (-1 < g < 1, 0 isotropic). A homogeneous
+ * medium has them everywhere; a grid medium (grid_offset >= 0) has them times a density,
+ * interpolated trilinearly between the voxels of a grid and 0 outside it. */
 typedef struct {
-    clbdpt_float4 sigma_a; /* absorption */
+    clbdpt_float4 sigma_a; /* absorption (per unit density in a grid medium) */
     clbdpt_float4 sigma_s; /* scattering */
     clbdpt_float4 sigma_t; /* extinction: sigma_a + sigma_s, stored to save the sum per use */
     float g;
-    clbdpt_int pad0, pad1, pad2;
+    float majorant;        /* grid: the largest extinction of any channel anywhere in the grid */
+    clbdpt_int grid_offset; /* grid: its first voxel in the density buffer; -1: homogeneous */
+    clbdpt_int pad0;
+    clbdpt_int grid_size[4]; /* grid: voxels along x, y, z (x fastest in the buffer); unused w */
+    /* grid: rows of the affine map from scene space to voxel coordinates, in which voxel
+     * (i, j, k) is centred at (i, j, k) and the grid spans -0.5 .. size - 0.5 */
+    clbdpt_float4 world_to_grid[3];
 } Medium;
 
 /* ---- Lights --------------------------------------------------------------------------- */

@@ -72,11 +72,15 @@ CLBDPT_CHECK_FIELD(Material, bump_texture, 84);
 CLBDPT_CHECK_FIELD(Material, bump_scale, 92);
 CLBDPT_CHECK_FIELD(Material, exterior_medium, 96);
 
-CLBDPT_CHECK_STRUCT(Medium, 64, 16);
+CLBDPT_CHECK_STRUCT(Medium, 128, 16);
 CLBDPT_CHECK_FIELD(Medium, sigma_a, 0);
 CLBDPT_CHECK_FIELD(Medium, sigma_s, 16);
 CLBDPT_CHECK_FIELD(Medium, sigma_t, 32);
 CLBDPT_CHECK_FIELD(Medium, g, 48);
+CLBDPT_CHECK_FIELD(Medium, majorant, 52);
+CLBDPT_CHECK_FIELD(Medium, grid_offset, 56);
+CLBDPT_CHECK_FIELD(Medium, grid_size, 64);
+CLBDPT_CHECK_FIELD(Medium, world_to_grid, 80);
 
 CLBDPT_CHECK_STRUCT(Light, 80, 16);
 CLBDPT_CHECK_FIELD(Light, position, 0);

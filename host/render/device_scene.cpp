@@ -163,6 +163,19 @@ DeviceScene build_device_scene(const Scene& scene, int width, int height) {
         m.sigma_s = float4_of(desc.sigma_s);
         m.sigma_t = float4_of(desc.sigma_a + desc.sigma_s);
         m.g = desc.g;
+        m.grid_offset = -1;
+        if (desc.density) {
+            const DensityGrid& grid = *desc.density;
+            m.grid_offset = int(ds.densities.size());
+            ds.densities.insert(ds.densities.end(), grid.values.begin(), grid.values.end());
+            for (int axis = 0; axis < 3; ++axis) {
+                m.grid_size[axis] = grid.size[axis];
+                m.world_to_grid[axis] = {{grid.world_to_grid[axis][0], grid.world_to_grid[axis][1],
+                                          grid.world_to_grid[axis][2], grid.world_to_grid[axis][3]}};
+            }
+            const Vec3 sigma_t = desc.sigma_a + desc.sigma_s;
+            m.majorant = grid.max_value() * std::max(sigma_t.x, std::max(sigma_t.y, sigma_t.z));
+        }
         ds.media.push_back(m);
     }
     ds.info.camera_medium = medium_at(ds, scene.scene_medium, scene.camera.eye);

@@ -27,6 +27,7 @@ struct DeviceScene {
     std::vector<TextureInfo> textures;
     std::vector<uint32_t> texels;
     std::vector<Medium> media;            // referenced as 1 + index by materials and lights
+    std::vector<float> densities;         // grid media's voxels, one grid after another
     Camera camera{};
     SceneInfo info{};
     double bvh_build_seconds = 0;

@@ -93,6 +93,9 @@ std::vector<std::string> kernel_defines(const DeviceScene& scene, Integrator int
     // Media change the sample draws' table (cl/sample_dimensions.h): off in "all features"
     // builds too, so their images stay those of the scene's own build.
     if (media) d.push_back("HAS_MEDIA");
+    bool grids = false;
+    for (const Medium& m : scene.media) grids |= m.grid_offset >= 0;
+    if (grids) d.push_back("HAS_MEDIUM_GRIDS");
     return d;
 }
 

@@ -23,7 +23,8 @@ SceneBuffers::SceneBuffers(cl::Context& context, const DeviceScene& scene) : sce
                 upload(context, scene.light_cdf), upload(context, scene.env_texels),
                 upload(context, scene.env_distribution), upload(context, scene.uvs),
                 upload(context, scene.textures),  upload(context, scene.texels),
-                upload(context, scene.media)};
+                upload(context, scene.media),
+                upload(context, scene.densities)};
 }
 
 void SceneBuffers::set_args(cl::Kernel& kernel) const {

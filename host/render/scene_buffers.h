@@ -16,7 +16,7 @@ public:
     // Sets arguments 0 .. kSceneArgCount - 1.
     void set_args(cl::Kernel& kernel) const;
 
-    static constexpr cl_uint kSceneArgCount = 15;
+    static constexpr cl_uint kSceneArgCount = 16;
     static constexpr cl_uint kCameraArg = kSceneArgCount - 2;  // then SceneInfo, the last
 
 private:

@@ -5,9 +5,11 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
+#include "scene/density_grid.h"
 #include "shared/types.h"
 #include "util/vec3.h"
 
@@ -43,13 +45,15 @@ struct EnvironmentMap {
     std::vector<float> rgb;  // width * height * 3
 };
 
-// A homogeneous participating medium from the scene file's "media" (cl/medium.h): coefficients
-// per scene unit, per RGB channel, and the Henyey-Greenstein asymmetry g.
+// A participating medium from the scene file's "media" (cl/medium.h): coefficients per scene
+// unit, per RGB channel, and the Henyey-Greenstein asymmetry g; with a density grid the
+// coefficients are per unit density (the grid's values already times the scene file's "scale").
 struct MediumDesc {
     std::string name;
     Vec3 sigma_a;
     Vec3 sigma_s;
     float g = 0.0f;
+    std::shared_ptr<const DensityGrid> density;  // null: homogeneous
 };
 
 struct RenderSettings {

@@ -284,20 +284,81 @@ LightDesc read_light(const SceneJsonReader& r, const json& value, const std::str
     return light;
 }
 
-// "media": {"fog": {"sigma_a": [r, g, b], "sigma_s": [r, g, b], "g": 0.3}, ...}
-std::vector<MediumDesc> read_media(const SceneJsonReader& r, const json& section) {
+// A medium's "density": a grid written out in the scene file,
+//   {"resolution": [nx, ny, nz], "values": [nx * ny * nz numbers, x fastest], "bounds": [lo, hi]}
+// or one read from an OpenVDB file, {"file": "smoke.vdb", "grid": "density", "bounds": [lo, hi]}
+// (bounds optional: the file's own placement); both take "scale", a factor on every value.
+std::shared_ptr<const DensityGrid> read_density(const SceneJsonReader& r, const json& value, const std::string& key,
+                                                const fs::path& scene_dir, std::vector<std::string>& warnings) {
+    r.object(value, key);
+    r.check_keys(value, key, {"resolution", "values", "bounds", "file", "grid", "scale"});
+    auto grid = std::make_shared<DensityGrid>();
+    const bool from_file = value.contains("file");
+    std::optional<std::pair<Vec3, Vec3>> bounds;
+    if (value.contains("bounds")) {
+        const json& b = value["bounds"];
+        if (!b.is_array() || b.size() != 2) r.fail(key + ".bounds", "must be [[x, y, z], [x, y, z]], the lowest and highest corners");
+        bounds.emplace(r.vec3(b[0], key + ".bounds"), r.vec3(b[1], key + ".bounds"));
+        for (int axis = 0; axis < 3; ++axis) {
+            if (!(bounds->first[axis] < bounds->second[axis])) r.fail(key + ".bounds", "must have its lowest corner below its highest on every axis");
+        }
+    }
+    if (from_file) {
+        if (value.contains("resolution") || value.contains("values")) r.fail(key, "takes either \"file\" or \"resolution\" and \"values\", not both");
+        const std::string file = fs::absolute(scene_dir / r.string(value["file"], key + ".file")).lexically_normal().string();
+        const std::string name = value.contains("grid") ? r.string(value["grid"], key + ".grid") : "density";
+        *grid = read_openvdb_grid(file, name);
+        if (grid->negative_voxels > 0) {
+            warnings.push_back(file + ": " + std::to_string(grid->negative_voxels) + " negative voxel(s) of grid \"" +
+                               name + "\" read as 0");
+        }
+        if (bounds) place_grid_in_box(*grid, bounds->first, bounds->second, 1);
+    } else {
+        if (value.contains("grid")) r.fail(key + ".grid", "names a grid of a \"file\", and there is none");
+        if (!value.contains("resolution") || !value.contains("values") || !bounds) {
+            r.fail(key, "needs \"file\", or \"resolution\", \"values\" and \"bounds\"");
+        }
+        const json& res = value["resolution"];
+        if (!res.is_array() || res.size() != 3) r.fail(key + ".resolution", "must be an array of 3 integers");
+        size_t count = 1;
+        for (int axis = 0; axis < 3; ++axis) {
+            grid->size[axis] = int(r.integer(res[axis], key + ".resolution", 1, 1024));
+            count *= size_t(grid->size[axis]);
+        }
+        const json& values = value["values"];
+        if (!values.is_array() || values.size() != count) {
+            r.fail(key + ".values", "must be an array of " + std::to_string(count) + " numbers (the resolution's product)");
+        }
+        grid->values.reserve(count);
+        for (size_t i = 0; i < count; ++i) {
+            grid->values.push_back(r.number_in(values[i], key + ".values[" + std::to_string(i) + "]", 0.0f, false,
+                                               INFINITY, false, "zero or positive"));
+        }
+        place_grid_in_box(*grid, bounds->first, bounds->second, 0);
+    }
+    if (value.contains("scale")) {
+        const float scale = r.number_in(value["scale"], key + ".scale", 0.0f, false, INFINITY, false, "zero or positive");
+        for (float& v : grid->values) v *= scale;
+    }
+    return grid;
+}
+
+// "media": {"fog": {"sigma_a": [r, g, b], "sigma_s": [r, g, b], "g": 0.3, "density": {...}}, ...}
+std::vector<MediumDesc> read_media(const SceneJsonReader& r, const json& section, const fs::path& scene_dir,
+                                   std::vector<std::string>& warnings) {
     r.object(section, "media");
     std::vector<MediumDesc> media;
     for (auto it = section.begin(); it != section.end(); ++it) {
         const std::string key = "media." + it.key();
         const json& value = r.object(it.value(), key);
-        r.check_keys(value, key, {"sigma_a", "sigma_s", "g"});
+        r.check_keys(value, key, {"sigma_a", "sigma_s", "g", "density"});
         MediumDesc m;
         m.name = it.key();
         if (m.name.empty()) r.fail(key, "needs a name");
         if (value.contains("sigma_a")) m.sigma_a = r.color(value["sigma_a"], key + ".sigma_a");
         if (value.contains("sigma_s")) m.sigma_s = r.color(value["sigma_s"], key + ".sigma_s");
         if (value.contains("g")) m.g = r.number_in(value["g"], key + ".g", -1.0f, true, 1.0f, true, "between -1 and 1 (exclusive)");
+        if (value.contains("density")) m.density = read_density(r, value["density"], key + ".density", scene_dir, warnings);
         media.push_back(m);
     }
     return media;
@@ -447,7 +508,7 @@ void load_json_scene(Scene& scene, const std::string& path) {
         }
     }
 
-    if (root.contains("media")) scene.media = read_media(r, root["media"]);
+    if (root.contains("media")) scene.media = read_media(r, root["media"], scene_dir, scene.warnings);
     if (root.contains("medium")) scene.scene_medium = medium_reference(r, scene.media, root["medium"], "medium");
     if (root.contains("materials")) r.object(root["materials"], "materials");
     if (scene.scene_medium != 0) {

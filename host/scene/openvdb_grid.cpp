@@ -1,0 +1,105 @@
+// OpenVDB files into dense density grids (scene/density_grid.h). Built with OpenVDB when CMake
+// finds it (CLBDPT_HAS_OPENVDB); without it, asking for a file is a clear error.
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+
+#include "scene/density_grid.h"
+#include "util/error.h"
+
+#ifdef CLBDPT_HAS_OPENVDB
+#include <openvdb/openvdb.h>
+#endif
+
+namespace clbdpt {
+
+#ifdef CLBDPT_HAS_OPENVDB
+
+bool openvdb_supported() { return true; }
+
+namespace {
+
+template <typename GridType>
+DensityGrid dense_copy(const std::string& path, const std::string& grid_name, const GridType& grid) {
+    const openvdb::CoordBBox active = grid.evalActiveVoxelBoundingBox();
+    if (active.empty()) throw Error(path + ": grid \"" + grid_name + "\" has no active voxels");
+    if (!grid.transform().isLinear()) {
+        throw Error(path + ": grid \"" + grid_name + "\" has a non-linear (frustum) transform, which is not supported");
+    }
+    // One voxel of background around the active box, so the density fades to it as in VDB's
+    // own trilinear sampling.
+    const openvdb::Coord lo = active.min() - openvdb::Coord(1), hi = active.max() + openvdb::Coord(1);
+    DensityGrid out;
+    uint64_t count = 1;
+    for (int axis = 0; axis < 3; ++axis) {
+        out.size[axis] = hi[axis] - lo[axis] + 1;
+        count *= uint64_t(out.size[axis]);
+    }
+    if (count > (uint64_t(1) << 28)) {
+        throw Error(path + ": grid \"" + grid_name + "\" spans " + std::to_string(out.size[0]) + "x" +
+                    std::to_string(out.size[1]) + "x" + std::to_string(out.size[2]) +
+                    " voxels, more than the 2^28 a dense copy may have");
+    }
+    out.values.resize(count);
+    auto accessor = grid.getConstAccessor();
+    size_t i = 0;
+    for (int z = lo.z(); z <= hi.z(); ++z) {
+        for (int y = lo.y(); y <= hi.y(); ++y) {
+            for (int x = lo.x(); x <= hi.x(); ++x, ++i) {
+                const double v = double(accessor.getValue(openvdb::Coord(x, y, z)));
+                if (!std::isfinite(v)) {
+                    throw Error(path + ": grid \"" + grid_name + "\" has a non-finite voxel at (" + std::to_string(x) +
+                                ", " + std::to_string(y) + ", " + std::to_string(z) + ")");
+                }
+                if (v < 0) ++out.negative_voxels;
+                out.values[i] = v < 0 ? 0.0f : float(v);
+            }
+        }
+    }
+    // index = world * M^-1 (OpenVDB's row-vector convention); grid = index - lo.
+    const openvdb::math::Mat4d inverse = grid.transform().baseMap()->getAffineMap()->getMat4().inverse();
+    for (int axis = 0; axis < 3; ++axis) {
+        for (int j = 0; j < 3; ++j) out.world_to_grid[axis][j] = float(inverse(j, axis));
+        out.world_to_grid[axis][3] = float(inverse(3, axis) - lo[axis]);
+    }
+    return out;
+}
+
+}  // namespace
+
+DensityGrid read_openvdb_grid(const std::string& path, const std::string& grid_name) {
+    openvdb::initialize();
+    if (!std::filesystem::is_regular_file(path)) throw Error(path + ": no such file");
+    openvdb::GridBase::Ptr base;
+    std::string names;
+    try {
+        openvdb::io::File file(path);
+        file.open();
+        for (auto it = file.beginName(); it != file.endName(); ++it) names += (names.empty() ? "" : ", ") + it.gridName();
+        if (file.hasGrid(grid_name)) base = file.readGrid(grid_name);
+        file.close();
+    } catch (const openvdb::Exception& e) {
+        throw Error(path + ": not a readable OpenVDB file (" + e.what() + ")");
+    } catch (const std::exception& e) {
+        throw Error(path + ": not a readable OpenVDB file (" + e.what() + ")");
+    }
+    if (!base) {
+        throw Error(path + ": no grid named \"" + grid_name + "\" (" +
+                    (names.empty() ? std::string("the file has no grids") : "grids: " + names) + ")");
+    }
+    if (auto g = openvdb::gridPtrCast<openvdb::FloatGrid>(base)) return dense_copy(path, grid_name, *g);
+    if (auto g = openvdb::gridPtrCast<openvdb::DoubleGrid>(base)) return dense_copy(path, grid_name, *g);
+    throw Error(path + ": grid \"" + grid_name + "\" holds " + base->valueType() + " values, not float or double");
+}
+
+#else
+
+bool openvdb_supported() { return false; }
+
+DensityGrid read_openvdb_grid(const std::string& path, const std::string&) {
+    throw Error(path + ": this build of clbdpt cannot read OpenVDB files (install libopenvdb-dev and rebuild)");
+}
+
+#endif
+
+}  // namespace clbdpt
