@@ -653,6 +653,29 @@ TEST(SceneMedia, MediaMaterialsAndTheSceneMedium) {
     EXPECT_EQ(material(scene, "veil").exterior_medium, 1);
 }
 
+// A grid written out in the scene file: values x fastest, scaled, placed in its bounds so that
+// the voxel centres sit evenly inside them.
+TEST(SceneMedia, DensityGridFromTheSceneFile) {
+    TempScene t(media_scene(R"("media": {"smoke": {"sigma_s": [1, 1, 1], "density": {
+                                   "resolution": [2, 1, 3], "values": [0, 1, 2, 3, 4, 5], "scale": 0.5,
+                                   "bounds": [[0, 0.5, 0], [1, 1.5, 1]]}}},
+                               "materials": {"smoke": {"interface": true, "interior": "smoke"}})"));
+    const Scene scene = load_scene(t.path());
+    ASSERT_EQ(scene.media.size(), 1u);
+    ASSERT_TRUE(scene.media[0].density);
+    const DensityGrid& g = *scene.media[0].density;
+    EXPECT_EQ(g.size[0], 2);
+    EXPECT_EQ(g.size[1], 1);
+    EXPECT_EQ(g.size[2], 3);
+    EXPECT_EQ(g.values, (std::vector<float>{0, 0.5f, 1, 1.5f, 2, 2.5f}));
+    // Voxel (1, 0, 2) is centred at (0.75, 1.0, 5/6) in scene space.
+    const float p[3] = {0.75f, 1.0f, 5.0f / 6.0f}, expected[3] = {1, 0, 2};
+    for (int axis = 0; axis < 3; ++axis) {
+        const float* row = g.world_to_grid[axis];
+        EXPECT_NEAR(row[0] * p[0] + row[1] * p[1] + row[2] * p[2] + row[3], expected[axis], 1e-5f) << axis;
+    }
+}
+
 TEST(SceneMedia, NoDefaultEnvironmentInAFoggyScene) {
     // Without "lights" and with an emitter the scene needs no default light anyway; a foggy
     // scene whose only light is missing gets none (an environment cannot shine through fog).
@@ -696,7 +719,21 @@ INSTANTIATE_TEST_SUITE_P(
                      R"(material "veil" separates two media but its surface is not closed (4 edge(s))"},
         BadMediaCase{R"("media": {"fog": {"sigma_s": [1, 1, 1]}}, "medium": "fog",
                         "lights": [{"type": "environment", "radiance": [1, 1, 1]}])",
-                     R"("lights[0]" is infinitely far: it cannot shine through the scene-wide "medium")"}));
+                     R"("lights[0]" is infinitely far: it cannot shine through the scene-wide "medium")"},
+        BadMediaCase{R"("media": {"s": {"density": {"resolution": [2, 2, 2], "values": [1, 2, 3], "bounds": [[0, 0, 0], [1, 1, 1]]}}})",
+                     R"("media.s.density.values" must be an array of 8 numbers (the resolution's product))"},
+        BadMediaCase{R"("media": {"s": {"density": {"resolution": [1, 1, 1], "values": [-1], "bounds": [[0, 0, 0], [1, 1, 1]]}}})",
+                     R"("media.s.density.values[0]" must be zero or positive)"},
+        BadMediaCase{R"("media": {"s": {"density": {"resolution": [1, 1, 0], "values": [], "bounds": [[0, 0, 0], [1, 1, 1]]}}})",
+                     R"("media.s.density.resolution" must be an integer from 1 to 1024)"},
+        BadMediaCase{R"("media": {"s": {"density": {"resolution": [1, 1, 1], "values": [1]}}})",
+                     R"("media.s.density" needs "file", or "resolution", "values" and "bounds")"},
+        BadMediaCase{R"("media": {"s": {"density": {"resolution": [1, 1, 1], "values": [1], "bounds": [[0, 0, 0], [1, 0, 1]]}}})",
+                     R"("media.s.density.bounds" must have its lowest corner below its highest on every axis)"},
+        BadMediaCase{R"("media": {"s": {"density": {"file": "smoke.vdb", "values": [1]}}})",
+                     R"("media.s.density" takes either "file" or "resolution" and "values", not both)"},
+        BadMediaCase{R"("media": {"s": {"density": {"files": "smoke.vdb"}}})", R"(unknown key "media.s.density.files")"},
+        BadMediaCase{R"("media": {"s": {"density": {"file": "no_such_smoke.vdb"}}})", R"(no_such_smoke.vdb: no such file)"}));
 
 // ---- Bare OBJ scenes ---------------------------------------------------------------------
 

@@ -307,7 +307,11 @@ std::shared_ptr<const DensityGrid> read_density(const SceneJsonReader& r, const 
         if (value.contains("resolution") || value.contains("values")) r.fail(key, "takes either \"file\" or \"resolution\" and \"values\", not both");
         const std::string file = fs::absolute(scene_dir / r.string(value["file"], key + ".file")).lexically_normal().string();
         const std::string name = value.contains("grid") ? r.string(value["grid"], key + ".grid") : "density";
-        *grid = read_openvdb_grid(file, name);
+        try {
+            *grid = read_openvdb_grid(file, name);
+        } catch (const Error& e) {
+            r.fail(key + ".file", std::string("cannot be used: ") + e.what());
+        }
         if (grid->negative_voxels > 0) {
             warnings.push_back(file + ": " + std::to_string(grid->negative_voxels) + " negative voxel(s) of grid \"" +
                                name + "\" read as 0");
