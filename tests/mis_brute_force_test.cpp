@@ -15,6 +15,15 @@
 // remap0 and delta rules, the strategy sets of bdpt / pt / lt, and the density conventions of
 // every light and both cameras, independently of mis.h.
 //
+// In media (cl/medium.h), a second scene fills the space with a homogeneous chromatic medium and
+// its paths have medium vertices too (phase-function densities, no cosines, always connectible):
+// every density of a vertex reached along a segment of length d then carries the segment's
+// distance density toward it, mean_c(T_c sigma_t,c) to a medium vertex and mean_c(T_c) to a
+// surface, light or camera (T_c = exp(-sigma_t,c d)); the connection's segment carries none
+// (its transmittance is evaluated, not sampled). Those paths have no specular vertices: next
+// to a delta the distance densities are dropped with it (remap0), a convention the vacuum cases
+// check.
+//
 // Density conventions (pbrt-v3, Veach 10.2-10.3; the definitions the weights are balanced for):
 //  - area measure for every vertex on a surface or a point light; solid angle for a light at
 //    infinity (environment, directional) and for an environment vertex reached by an escaped
@@ -42,10 +51,10 @@
 namespace clbdpt::test {
 namespace {
 
-static_assert(sizeof(TestVertex) == 96, "TestVertex must match the device layout");
-static_assert(sizeof(MisCase) == 16, "MisCase must match the device layout");
+static_assert(sizeof(TestVertex) == 112, "TestVertex must match the device layout");
+static_assert(sizeof(MisCase) == 32, "MisCase must match the device layout");
 
-constexpr int kVertexCamera = 0, kVertexLight = 1, kVertexSurface = 2;  // VERTEX_* (cl/vertex.h)
+constexpr int kVertexCamera = 0, kVertexLight = 1, kVertexSurface = 2, kVertexMedium = 3;  // VERTEX_* (cl/vertex.h)
 
 // ---- The scene ---------------------------------------------------------------------------------
 
@@ -110,6 +119,29 @@ const TestScene& scene() {
     return t;
 }
 
+// The same surfaces in a chromatic, forward-scattering medium filling space, lit by the area,
+// point and spot lights only (light from infinitely far cannot cross infinite fog).
+const D3 kSigmaA(0.05, 0.1, 0.2), kSigmaS(0.3, 0.25, 0.15);
+constexpr double kPhaseG = 0.4;
+
+const TestScene& media_scene() {
+    static TestScene t = [] {
+        Scene s = mis_scene();
+        s.lights.resize(2);  // point, spot
+        s.environment_map = EnvironmentMap();
+        MediumDesc fog;
+        fog.name = "fog";
+        fog.sigma_a = v3(kSigmaA);
+        fog.sigma_s = v3(kSigmaS);
+        fog.g = float(kPhaseG);
+        s.media.push_back(fog);
+        s.scene_medium = 1;
+        for (Material& m : s.materials) m.interior_medium = m.exterior_medium = 1;
+        return TestScene(s, kWidth, kHeight);
+    }();
+    return t;
+}
+
 // ---- Reference densities in double -------------------------------------------------------------
 
 struct Reference {
@@ -170,6 +202,14 @@ struct Reference {
         *ry = (1 - p.y / plane / cam.tan_half_height) * 0.5 * cam.height;
         return *rx >= 0 && *rx < cam.width && *ry >= 0 && *ry < cam.height;
     }
+    // With media: the scene-wide medium's extinction (float, as the device has it).
+    bool media = false;
+    D3 sigma_t;
+    // Henyey-Greenstein density of scattering from wo into wi (both away from the vertex).
+    double phase_pdf(D3 wo, D3 wi) const {
+        double c = -dot(wo, wi), g = kPhaseG, denom = 1 + g * g - 2 * g * c;
+        return (1 - g * g) / (4 * kPi * denom * std::sqrt(denom));
+    }
     // pdf_dir = 1 / (A cos^3) inside the film (camera_pdf_we).
     double camera_pdf_dir(D3 lens, D3 dir) const {
         double rx, ry;
@@ -202,9 +242,10 @@ struct Reference {
 // ---- Paths -------------------------------------------------------------------------------------
 
 struct HostVertex {
-    D3 p, ng, ns;      // ng = 0 off surfaces (camera, point and spot lights, lights at infinity)
+    D3 p, ng, ns;      // ng = 0 off surfaces (camera, point and spot lights, lights at infinity, media)
     int material = -1; // surfaces
     bool specular = false;
+    bool medium = false;  // a scattering in the medium
 };
 
 struct Path {
@@ -232,9 +273,28 @@ D3 dir(const HostVertex& from, const HostVertex& to) { return normalize(to.p - f
 struct Densities {
     // cam[i]: density of x_i sampled by the camera subpath (i >= 1); light[j]: by the light
     // subpath (j <= n-1; light[n-1] is the light vertex's own, light[n-2] the emission's).
-    // A vertex sampled through a specular vertex gets 1 (see the file comment).
-    std::vector<double> cam, light;
+    // A vertex sampled through a specular vertex gets 1 (see the file comment). With media,
+    // toward[i] / away[i]: the distance densities of the segment x_{i-1} x_i toward x_i and
+    // toward x_{i-1} (factors of cam[i] and light[i-1]); 1 in vacuum.
+    std::vector<double> cam, light, toward, away;
 };
+
+// Distance density of a segment toward its end `to` (the file comment).
+double distance_density(const Reference& ref, const HostVertex& from, const HostVertex& to) {
+    if (!ref.media) return 1;
+    double d = length(to.p - from.p), sum = 0;
+    for (int c = 0; c < 3; ++c) {
+        double sigma = c == 0 ? ref.sigma_t.x : c == 1 ? ref.sigma_t.y : ref.sigma_t.z;
+        sum += std::exp(-sigma * d) * (to.medium ? sigma : 1.0);
+    }
+    return sum / 3;
+}
+
+// Density of scattering at v from direction toward `from` into direction toward `to`.
+double scatter_pdf(const Reference& ref, const HostVertex& v, const HostVertex& from, const HostVertex& to) {
+    if (v.medium) return ref.phase_pdf(dir(v, from), dir(v, to));
+    return ref.bsdf_pdf(v.material, v.ns, dir(v, from), dir(v, to));
+}
 
 Densities densities(const Reference& ref, const Path& path) {
     const std::vector<HostVertex>& x = path.x;
@@ -251,9 +311,15 @@ Densities densities(const Reference& ref, const Path& path) {
         } else if (x[i - 1].specular) {
             d.cam[i] = 1;
         } else {
-            double pdf = ref.bsdf_pdf(x[i - 1].material, x[i - 1].ns, dir(x[i - 1], x[i - 2]), dir(x[i - 1], x[i]));
-            d.cam[i] = to_area(pdf, x[i - 1], x[i], to_infinite);
+            d.cam[i] = to_area(scatter_pdf(ref, x[i - 1], x[i - 2], x[i]), x[i - 1], x[i], to_infinite);
         }
+    }
+    d.toward.assign(n, 1.0);
+    d.away.assign(n, 1.0);
+    for (int i = 1; i < n; ++i) {
+        d.toward[i] = distance_density(ref, x[i - 1], x[i]);
+        d.away[i] = distance_density(ref, x[i], x[i - 1]);
+        d.cam[i] *= d.toward[i];
     }
     const HostVertex& lv = x[n - 1];
     D3 w_light = dir(x[n - 2], lv);  // toward the light
@@ -289,10 +355,10 @@ Densities densities(const Reference& ref, const Path& path) {
         if (x[j + 1].specular) {
             d.light[j] = 1;
         } else {
-            double pdf = ref.bsdf_pdf(x[j + 1].material, x[j + 1].ns, dir(x[j + 1], x[j + 2]), dir(x[j + 1], x[j]));
-            d.light[j] = to_area(pdf, x[j + 1], x[j], false);
+            d.light[j] = to_area(scatter_pdf(ref, x[j + 1], x[j + 2], x[j]), x[j + 1], x[j], false);
         }
     }
+    for (int j = 0; j + 1 < n; ++j) d.light[j] *= d.away[j + 1];
     return d;
 }
 
@@ -344,6 +410,9 @@ constexpr float kJunk = 777.0f;
 
 TestVertex test_vertex(const HostVertex& v, int type, int light, D3 wo, bool delta) {
     TestVertex t{};
+    if (v.medium && type == kVertexSurface) type = kVertexMedium;
+    t.medium = v.medium ? 1 : 0;
+    t.dist_fwd = t.dist_rev = 1.0f;
     t.p = f4(v.p);
     t.ng = f4(v.ng);
     t.ns = f4(v.ns);
@@ -384,6 +453,10 @@ std::vector<TestVertex> camera_subpath(const Reference& ref, const Path& path, c
         // samples x_{i+2}; 0 if x_{i+1} is specular. The last two are the connection's.
         if (i <= t - 3 && i >= 1) v.pdf_rev = float(x[i + 1].specular ? 0.0 : d.light[i]);
         else v.pdf_rev = kJunk;
+        if (i >= 1) {  // the segment from x_{i-1}, walked from the camera
+            v.dist_fwd = float(d.toward[i]);
+            v.dist_rev = float(d.away[i]);
+        }
         out.push_back(v);
     }
     return out;
@@ -416,6 +489,10 @@ std::vector<TestVertex> light_subpath(const Reference& ref, const Path& path, co
         // pdf_rev: the camera-side density of x_i from x_{i-1}; 0 if x_{i-1} is specular.
         if (k <= s - 3) v.pdf_rev = float(x[i - 1].specular ? 0.0 : d.cam[i]);
         else v.pdf_rev = kJunk;
+        if (k >= 1) {  // the segment from x_{i+1}, walked from the light
+            v.dist_fwd = float(d.away[i + 1]);
+            v.dist_rev = float(d.toward[i + 1]);
+        }
         out.push_back(v);
     }
     return out;
@@ -540,10 +617,16 @@ struct PathGenerator {
         }
         }
         if (length(lv.p - last.p) < 0.3) return false;
-        // Materials and normals of the scattering vertices.
+        // Materials and normals of the scattering vertices; in media, a third of them scatter in
+        // the medium instead.
         for (int i = 1; i < n - 1; ++i) {
+            if (ref.media && u() < 0.35) {
+                x[i].medium = true;
+                continue;
+            }
             double m = u();
             int material = m < 0.3 ? kDiffuse : m < 0.5 ? kGlossyRough : m < 0.7 ? kGlossySharp : m < 0.85 ? kMirror : kGlass;
+            if (ref.media && (material == kMirror || material == kGlass)) material = kDiffuse;  // see the file comment
             x[i].material = material;
             x[i].specular = material == kMirror || material == kGlass;
             D3 a = dir(x[i], x[i - 1]), b = dir(x[i], x[i + 1]);
@@ -595,10 +678,14 @@ constexpr double kWeightTolerance = 1e-3;
 // The weights of every strategy that can produce a path sum to 1 (float rounding).
 constexpr double kSumTolerance = 1e-4;
 
-void check_integrator(Integrator integrator, bool thin, uint64_t seed, Mix mix = Mix()) {
-    const TestScene& ts = scene();
+void check_integrator(Integrator integrator, bool thin, uint64_t seed, Mix mix = Mix(), bool media = false) {
+    const TestScene& ts = media ? media_scene() : scene();
     Camera cam = make_camera(camera_desc(thin), kWidth, kHeight);
     Reference ref(ts.ds, cam);
+    if (media) {
+        ref.media = true;
+        ref.sigma_t = d3(ts.ds.media[0].sigma_t);
+    }
     PathGenerator gen(ref, seed);
 
     std::vector<Path> paths;
@@ -606,11 +693,13 @@ void check_integrator(Integrator integrator, bool thin, uint64_t seed, Mix mix =
     std::vector<MisCase> cases;
     std::vector<CaseRef> refs;
     std::vector<int> lights = gen.area_lights;
-    for (int l : {gen.point, gen.spot, gen.directional, gen.environment}) lights.push_back(l);
+    for (int l : {gen.point, gen.spot, gen.directional, gen.environment})
+        if (l >= 0) lights.push_back(l);
     const size_t target = 1200;
     size_t attempts = 0;
     std::vector<size_t> per_kind(5, 0);
     size_t across_terminator = 0;  // paths across a terminator band with two or more producers
+    size_t medium_vertices = 0;
     while (paths.size() < target && attempts < 200 * target) {
         ++attempts;
         int scatter = int(gen.u() * 6);  // depth 0 .. 5
@@ -640,6 +729,7 @@ void check_integrator(Integrator integrator, bool thin, uint64_t seed, Mix mix =
         }
         if (producers.empty()) continue;
         if (path.across_terminator && producers.size() >= 2) ++across_terminator;
+        for (const HostVertex& v : path.x) medium_vertices += v.medium;
         size_t index = paths.size();
         paths.push_back(path);
         ++per_kind[size_t(light_kind(ts.ds, path))];
@@ -652,12 +742,19 @@ void check_integrator(Integrator integrator, bool thin, uint64_t seed, Mix mix =
             for (const TestVertex& v : light_subpath(ref, path, d, s)) vertices.push_back(v);
             c.camera_offset = int(vertices.size());
             for (const TestVertex& v : camera_subpath(ref, path, d, t)) vertices.push_back(v);
+            // The connection x_{t-1} -- x_t: its distance densities toward either end.
+            c.to_qs = float(s > 0 ? d.toward[t] : 1.0);
+            c.to_pt = float(s > 0 ? d.away[t] : 1.0);
             cases.push_back(c);
             refs.push_back({index, s, t, p[s] / sum});
         }
     }
     ASSERT_EQ(paths.size(), target) << "could not generate enough paths";
-    for (int kind = 0; kind < 5; ++kind) EXPECT_GT(per_kind[kind], target / 20) << "light kind " << kind;
+    for (int light : lights) {
+        const int kind = ts.ds.lights[size_t(light)].kind;
+        EXPECT_GT(per_kind[size_t(kind)], target / 20) << "light kind " << kind;
+    }
+    if (media) EXPECT_GT(medium_vertices, target / 2) << "medium vertices";  // about 1.2 per path
     // Full bdpt has the most strategies that can connect at such a vertex.
     if (integrator == Integrator::Bdpt && mix.light_subpaths == 1 && mix.inner_connections) {
         EXPECT_GT(across_terminator, target / 50) << "terminator paths";
@@ -712,6 +809,12 @@ TEST(MisBruteForce, LtThinLens) { check_integrator(Integrator::Lt, true, 106); }
 TEST(MisBruteForce, BdptQuarterLightSubpaths) { check_integrator(Integrator::Bdpt, false, 107, Mix{0.25, true}); }
 TEST(MisBruteForce, BdptNoInnerConnections) { check_integrator(Integrator::Bdpt, true, 108, Mix{0.5, false}); }
 TEST(MisBruteForce, BdptNoLightSubpaths) { check_integrator(Integrator::Bdpt, false, 109, Mix{0.0, true}); }
+
+// Paths with medium vertices, in a chromatic medium filling space.
+TEST(MisBruteForce, BdptInMedia) { check_integrator(Integrator::Bdpt, false, 111, Mix(), /*media=*/true); }
+TEST(MisBruteForce, BdptThinLensInMedia) { check_integrator(Integrator::Bdpt, true, 112, Mix{0.25, true}, true); }
+TEST(MisBruteForce, PtInMedia) { check_integrator(Integrator::Pt, false, 113, Mix(), true); }
+TEST(MisBruteForce, LtInMedia) { check_integrator(Integrator::Lt, true, 114, Mix(), true); }
 
 }  // namespace
 }  // namespace clbdpt::test

@@ -8,18 +8,24 @@
 #include "shared/types.h"
 
 /* A path vertex in a layout both compilers agree on (PathVertex holds float3, 16 bytes on the
- * device): 4 x 16 + 8 + 24 = 96 bytes. */
+ * device): 4 x 16 + 8 + 16 + 8 + 16 = 112 bytes. With media (HAS_MEDIA) a vertex also has its
+ * medium and the distance densities of the segment that reached it (PathVertex.dist_fwd,
+ * dist_rev). */
 typedef struct {
     clbdpt_float4 p, ng, ns, wo;
     float pdf_fwd, pdf_rev;
     clbdpt_int type, delta, material, light;
-    clbdpt_int pad0, pad1;
+    float dist_fwd, dist_rev;
+    clbdpt_int medium, pad0, pad1, pad2;
 } TestVertex;
 
 /* Strategy (s, t): light_path = vertices[light_offset ..] (s of them), camera_path =
- * vertices[camera_offset ..] (t of them). */
+ * vertices[camera_offset ..] (t of them); to_qs, to_pt: the connection's distance densities
+ * toward its ends (1 in vacuum). */
 typedef struct {
     clbdpt_int s, t, light_offset, camera_offset;
+    float to_qs, to_pt;
+    clbdpt_int pad0, pad1;
 } MisCase;
 
 #ifdef CLBDPT_DEVICE
@@ -38,6 +44,11 @@ inline PathVertex path_vertex(__global const TestVertex* v) {
     r.delta = v->delta;
     r.material = v->material;
     r.light = v->light;
+#ifdef HAS_MEDIA
+    r.medium = v->medium;
+    r.dist_fwd = v->dist_fwd;
+    r.dist_rev = v->dist_rev;
+#endif
     return r;
 }
 
@@ -74,7 +85,7 @@ __kernel void mis_weight_test(SCENE_KERNEL_ARGS, __global const TestVertex* vert
         sampled.pdf_rev = 0.0f;
         sampled.pdf_fwd = vertex_pdf_light_origin(&scene, &sampled, &camera_path[c.t - 1]);
     }
-    out[gid] = mis_weight(&scene, &mix, light_path, camera_path, &sampled, c.s, c.t, 1.0f, 1.0f);
+    out[gid] = mis_weight(&scene, &mix, light_path, camera_path, &sampled, c.s, c.t, c.to_qs, c.to_pt);
 }
 
 #endif

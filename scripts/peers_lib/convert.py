@@ -281,6 +281,10 @@ def convert(scene_json, out_dir, width, height):
     media = js.get("media", {})
     desc["media"] = {name: {"sigma_a": m.get("sigma_a", [0, 0, 0]), "sigma_s": m.get("sigma_s", [0, 0, 0]),
                             "g": m.get("g", 0.0)} for name, m in media.items()}
+    for name, m in media.items():
+        if "density" in m:
+            desc["media"][name]["grid"] = density_grid(m["density"], os.path.dirname(os.path.abspath(scene_json)),
+                                                       os.path.join(out_dir, f"grid_{name}.f32"))
     desc["medium"] = js.get("medium")
     overrides = js.get("materials", {})
     for shape in desc["shapes"]:
@@ -318,6 +322,64 @@ def convert(scene_json, out_dir, width, height):
     with open(os.path.join(out_dir, "scene.json"), "w") as f:
         json.dump(desc, f, indent=1)
     return desc
+
+
+# A .vdb file's grid as clbdpt reads it (host/scene/openvdb_grid.cpp): the active voxels'
+# bounding box plus one voxel of background around it, negative voxels as 0, placed by the
+# inverse of the file's linear transform. Run by Debian's /usr/bin/python3 (python3-openvdb).
+def _vdb_dense(path, name, out):
+    """(size, world_to_grid) of the grid `name` of a .vdb file, its voxels written to `out`."""
+    import subprocess
+    script = r"""
+import json, sys
+import numpy as np
+import pyopenvdb as vdb
+path, name, out = sys.argv[1:4]
+grid = vdb.read(path, name)
+lo, hi = grid.evalActiveVoxelBoundingBox()
+lo = [c - 1 for c in lo]
+hi = [c + 1 for c in hi]
+size = [hi[a] - lo[a] + 1 for a in range(3)]
+dense = np.zeros(size, dtype=np.float32)
+grid.copyToArray(dense, ijk=tuple(lo))
+np.clip(dense, 0, None).transpose(2, 1, 0).astype("<f4").tofile(out)
+# index -> world is affine: recover it from four points, then invert.
+o = np.array(grid.transform.indexToWorld((0, 0, 0)))
+axes = np.array([np.array(grid.transform.indexToWorld(tuple(np.eye(3)[a]))) - o for a in range(3)]).T
+inv = np.linalg.inv(axes)
+rows = [list(inv[a]) + [float(-inv[a] @ o - lo[a])] for a in range(3)]
+print(json.dumps({"size": size, "world_to_grid": rows}))
+"""
+    res = subprocess.run(["/usr/bin/python3", "-c", script, path, name, out], check=True, capture_output=True, text=True)
+    meta = json.loads(res.stdout)
+    return meta["size"], meta["world_to_grid"]
+
+
+def _place_in_box(size, lo, hi, padding):
+    """clbdpt's place_grid_in_box (host/scene/density_grid.cpp)."""
+    rows = []
+    for a in range(3):
+        scale = (size[a] - 2 * padding) / (hi[a] - lo[a])
+        rows.append([scale if j == a else 0.0 for j in range(3)] + [-lo[a] * scale - 0.5 + padding])
+    return rows
+
+
+def density_grid(d, scene_dir, out):
+    """A medium's "density" (README "Participating media") as clbdpt reads it: voxels (x fastest,
+    float32, written to `out`, scale applied), their count per axis, and the affine map from
+    scene space to voxel coordinates (voxel centres at integers)."""
+    if "file" in d:
+        size, rows = _vdb_dense(os.path.join(scene_dir, d["file"]), d.get("grid", "density"), out)
+        if "bounds" in d:
+            rows = _place_in_box(size, d["bounds"][0], d["bounds"][1], 1)
+        values = list(struct.unpack(f"<{size[0] * size[1] * size[2]}f", open(out, "rb").read()))
+    else:
+        size, values = d["resolution"], [float(v) for v in d["values"]]
+        rows = _place_in_box(size, d["bounds"][0], d["bounds"][1], 0)
+    values = [v * d.get("scale", 1.0) for v in values]
+    with open(out, "wb") as f:
+        f.write(struct.pack(f"<{len(values)}f", *values))
+    return {"size": size, "voxels": out, "world_to_grid": rows, "max": max(values)}
 
 
 def _write_exr(path, px):

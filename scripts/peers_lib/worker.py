@@ -103,6 +103,24 @@ def mitsuba_bsdf(m):
     return {"type": "twosided", "bsdf": inner}  # clbdpt reflects on both faces
 
 
+def mitsuba_grid(mi, grid, sigma_t):
+    """A clbdpt density grid times sigma_t (3 channels) as a Mitsuba gridvolume. Mitsuba's grid
+    fills the unit cube with voxel centres at (i + 0.5) / n, clamped at its faces, as clbdpt's;
+    to_world takes it to where clbdpt's world_to_grid puts the voxels."""
+    import numpy as np
+    nx, ny, nz = grid["size"]
+    density = np.fromfile(grid["voxels"], dtype="<f4").reshape(nz, ny, nx)
+    data = np.stack([density * c for c in sigma_t], axis=-1).astype(np.float32)
+    a = np.array([row[:3] for row in grid["world_to_grid"]], dtype=np.float64)
+    b = np.array([row[3] for row in grid["world_to_grid"]], dtype=np.float64)
+    a_inv = np.linalg.inv(a)
+    m = np.eye(4)
+    m[:3, :3] = a_inv @ np.diag([nx, ny, nz])  # unit cube -> voxel coordinates -> scene
+    m[:3, 3] = a_inv @ (-0.5 - b)
+    return {"type": "gridvolume", "grid": mi.VolumeGrid(data), "filter_type": "trilinear",
+            "to_world": mi.ScalarTransform4f(m.tolist())}
+
+
 def mitsuba_scene(mi, desc, spp, seed, max_depth_offset=1):
     c = desc["camera"]
     scale = _scene_scale(desc)
@@ -129,6 +147,8 @@ def mitsuba_scene(mi, desc, spp, seed, max_depth_offset=1):
                                    "sigma_t": {"type": "rgb", "value": sigma_t},
                                    "albedo": {"type": "rgb", "value": albedo},
                                    "phase": {"type": "hg", "g": float(m["g"])}}
+        if m.get("grid"):
+            scene["medium_" + name].update({"type": "heterogeneous", "sigma_t": mitsuba_grid(mi, m["grid"], sigma_t)})
     if desc.get("medium"):
         # clbdpt finds the camera's medium with a probe ray; the peers' scenes keep the camera
         # in the scene-wide medium.
