@@ -37,7 +37,7 @@ constexpr int kDepth = 5;
 
 RegionStats render(const DeviceScene& scene, Integrator integrator, int depth, uint32_t seed, int passes,
                    const std::string& what) {
-    return render_stats_or_fail(scene, make_options(integrator, depth, seed), scaled_passes(passes), kBlocks, what);
+    return render_regions(scene, integrator, depth, seed, passes, what, kBlocks);
 }
 
 // ---- Scene scale ---------------------------------------------------------------------------

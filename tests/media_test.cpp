@@ -33,28 +33,21 @@ constexpr double kPi = 3.14159265358979323846;
 
 RegionStats render(const DeviceScene& scene, Integrator integrator, int depth, uint32_t seed, int passes,
                    const std::string& what, int blocks = kBlocks) {
-    return render_stats_or_fail(scene, make_options(integrator, depth, seed), scaled_passes(passes), blocks, what);
+    return render_regions(scene, integrator, depth, seed, passes, what, blocks);
 }
 
 // ---- Closed forms ---------------------------------------------------------------------------
 
 // An emitter facing the camera 3 units away, a slab of thickness 0.5 in between (an
-// index-matched box holding an absorbing medium, sigma_a per channel). The camera's field of
-// view is 4 degrees, so every ray crosses the slab within 0.1% of its thickness
-// (1/cos(2 deg) - 1 = 6e-4, below 0.2% of the attenuation's logarithm): each channel is
-// Le_c exp(-sigma_c 0.5) (1 + O(3e-4)). The emitter (0.22 wide) just fills the view (0.21
-// wide at its distance), so the light tracer's points on it mostly land on the film.
+// index-matched box holding an absorbing medium, sigma_a per channel; emitter_behind_slab):
+// every ray crosses the slab within 0.1% of its thickness (6e-4, below 0.2% of the
+// attenuation's logarithm), so each channel is Le_c exp(-sigma_c 0.5) (1 + O(3e-4)).
 TEST(Media, BeerLambertThroughAnAbsorbingSlab) {
     const Vec3 le{2.0f, 1.0f, 0.5f};
     const Vec3 sigma{0.4f, 1.0f, 2.0f};
     SceneBuilder b;
     int absorber = add_medium(b.scene, "ink", sigma, {0, 0, 0}, 0.0f);
-    int emitter = b.material(diffuse_material({0, 0, 0}, le), "panel");
-    int slab = b.material(interface_material(absorber), "slab");
-    const float h = 0.11f;
-    b.quad({-h, -h, 3}, {-h, h, 3}, {h, h, 3}, {h, -h, 3}, emitter);  // facing -z, toward the camera
-    b.box({-1.5f, -1.5f, 1.0f}, {1.5f, 1.5f, 1.5f}, /*inward=*/false, slab);
-    b.camera({0, 0, 0}, {0, 0, 1}, 4.0f);
+    emitter_behind_slab(b, le, b.material(interface_material(absorber), "slab"));
     DeviceScene scene = build_device_scene(b.scene, 16, 16);
     double expected = 0;
     for (int c = 0; c < 3; ++c) expected += le[c] * std::exp(-double(sigma[c]) * 0.5) / 3.0;
@@ -233,17 +226,11 @@ TEST(Media, SpotLightInFogAllEstimatorsAgree) {
 // Media switch on only where used: a scene without media has no HAS_MEDIA, one with only an
 // interface has it.
 TEST(Media, CompiledOnlyWhereUsed) {
-    auto has_media = [](const Scene& s) {
-        DeviceScene ds = build_device_scene(s, 8, 8);
-        for (const std::string& d : kernel_defines(ds, Integrator::Bdpt, 5, false, SamplerKind::Sobol))
-            if (d == "HAS_MEDIA") return true;
-        return false;
-    };
-    EXPECT_FALSE(has_media(room_scene(0.5f)));
+    EXPECT_FALSE(kernel_has_define(room_scene(0.5f), "HAS_MEDIA"));
     SceneBuilder b;
     lit_room(b);
     b.box({0.2f, 0.2f, 0.2f}, {0.4f, 0.4f, 0.4f}, false, b.material(interface_material(0), "nothing"));
-    EXPECT_TRUE(has_media(b.scene));
+    EXPECT_TRUE(kernel_has_define(b.scene, "HAS_MEDIA"));
 }
 
 }  // namespace

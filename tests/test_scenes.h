@@ -481,6 +481,34 @@ inline RenderOptions make_options(Integrator integrator, int max_depth, uint32_t
     return o;
 }
 
+// Per-region statistics of `passes` (times CLBDPT_TEST_SCALE) independent passes of one
+// integrator, independent sampler, over blocks x blocks regions.
+inline RegionStats render_regions(const DeviceScene& scene, Integrator integrator, int depth, uint32_t seed,
+                                  int passes, const std::string& what, int blocks = 4) {
+    return render_stats_or_fail(scene, make_options(integrator, depth, seed), scaled_passes(passes), blocks, what);
+}
+
+// Whether the kernel built for `scene` (bdpt, depth 5, its own features) has flag `define`.
+inline bool kernel_has_define(const Scene& scene, const std::string& define) {
+    DeviceScene ds = build_device_scene(scene, 8, 8);
+    for (const std::string& d : kernel_defines(ds, Integrator::Bdpt, 5, false, SamplerKind::Sobol))
+        if (d == define) return true;
+    return false;
+}
+
+// The set-up of the Beer-Lambert tests (media_test.cpp, medium_grid_test.cpp): an emitter of
+// radiance le 3 units in front of a camera whose 4-degree view it just fills (0.22 wide, the
+// view 0.21 at its distance, so the light tracer's points on it mostly land on the film), and
+// an axis-aligned box of material `slab` spanning z 1 .. 1.5 across the whole view. Every ray
+// crosses the slab within 0.1% of its thickness (1/cos(2 deg) - 1 = 6e-4).
+inline void emitter_behind_slab(SceneBuilder& b, Vec3 le, int slab) {
+    int emitter = b.material(diffuse_material({0, 0, 0}, le), "panel");
+    const float h = 0.11f;
+    b.quad({-h, -h, 3}, {-h, h, 3}, {h, h, 3}, {h, -h, 3}, emitter);  // facing -z, toward the camera
+    b.box({-1.5f, -1.5f, 1.0f}, {1.5f, 1.5f, 1.5f}, /*inward=*/false, slab);
+    b.camera({0, 0, 0}, {0, 0, 1}, 4.0f);
+}
+
 inline std::string options_name(const RenderOptions& o) {
     std::string n = integrator_name(o.integrator);
     if (o.sampler != SamplerKind::Independent) n += std::string("-") + sampler_name(o.sampler);

@@ -75,7 +75,9 @@ DensityGrid read_openvdb_grid(const std::string& path, const std::string& grid_n
     try {
         openvdb::io::File file(path);
         file.open();
-        for (auto it = file.beginName(); it != file.endName(); ++it) names += (names.empty() ? "" : ", ") + it.gridName();
+        for (auto it = file.beginName(); it != file.endName(); ++it) {
+            names += (names.empty() ? "" : ", ") + it.gridName();
+        }
         if (file.hasGrid(grid_name)) base = file.readGrid(grid_name);
         file.close();
     } catch (const openvdb::Exception& e) {

@@ -297,15 +297,22 @@ std::shared_ptr<const DensityGrid> read_density(const SceneJsonReader& r, const 
     std::optional<std::pair<Vec3, Vec3>> bounds;
     if (value.contains("bounds")) {
         const json& b = value["bounds"];
-        if (!b.is_array() || b.size() != 2) r.fail(key + ".bounds", "must be [[x, y, z], [x, y, z]], the lowest and highest corners");
+        if (!b.is_array() || b.size() != 2) {
+            r.fail(key + ".bounds", "must be [[x, y, z], [x, y, z]], the lowest and highest corners");
+        }
         bounds.emplace(r.vec3(b[0], key + ".bounds"), r.vec3(b[1], key + ".bounds"));
         for (int axis = 0; axis < 3; ++axis) {
-            if (!(bounds->first[axis] < bounds->second[axis])) r.fail(key + ".bounds", "must have its lowest corner below its highest on every axis");
+            if (!(bounds->first[axis] < bounds->second[axis])) {
+                r.fail(key + ".bounds", "must have its lowest corner below its highest on every axis");
+            }
         }
     }
     if (from_file) {
-        if (value.contains("resolution") || value.contains("values")) r.fail(key, "takes either \"file\" or \"resolution\" and \"values\", not both");
-        const std::string file = fs::absolute(scene_dir / r.string(value["file"], key + ".file")).lexically_normal().string();
+        if (value.contains("resolution") || value.contains("values")) {
+            r.fail(key, "takes either \"file\" or \"resolution\" and \"values\", not both");
+        }
+        const std::string file =
+            fs::absolute(scene_dir / r.string(value["file"], key + ".file")).lexically_normal().string();
         const std::string name = value.contains("grid") ? r.string(value["grid"], key + ".grid") : "density";
         try {
             *grid = read_openvdb_grid(file, name);
