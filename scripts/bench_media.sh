@@ -29,7 +29,7 @@ for rep in $(seq "$reps"); do
       run "$new" "$scene" "$integrator" "$scene/$integrator/new"
       if [ -n "$old" ]; then run "$old" "$scene" "$integrator" "$scene/$integrator/old"; fi
     done
-    for scene in ${MEDIA_SCENES-fog-spot cornell-fog}; do run "$new" "$scene" "$integrator" "$scene/$integrator/new"; done
+    for scene in ${MEDIA_SCENES-fog-spot cornell-fog smoke}; do run "$new" "$scene" "$integrator" "$scene/$integrator/new"; done
   done
 done
 
@@ -40,7 +40,7 @@ for line in open(sys.argv[1]):
     key, value = line.split()
     runs[key].append(float(value))
 med = {k: statistics.median(v) for k, v in runs.items()}
-twin = {"fog-spot": "point-spot", "cornell-fog": "cornell-specular"}
+twin = {"fog-spot": "point-spot", "cornell-fog": "cornell-specular", "smoke": "cornell-box"}
 print(f"{'scene':18s} {'integ':5s} {'M samples/s':>12s}  comparison (median of {len(next(iter(runs.values())))} runs)")
 for key in sorted(k for k in med if k.endswith("/new")):
     scene, integ, _ = key.split("/")
