@@ -118,7 +118,7 @@ inline int grid_interval(__global const Medium* m, float3 o, float3 d, float* t0
 }
 #endif
 
-/* Extinction and scattering per channel at point p of a medium (1 + index). */
+/* Extinction per channel at point p of a medium (1 + index). */
 inline float3 medium_sigma_t_at(const SceneData* scene, int medium, float3 p) {
     if (medium == MEDIUM_VACUUM) return (float3)(0.0f);
     __global const Medium* m = &scene->media[medium - 1];
@@ -128,13 +128,6 @@ inline float3 medium_sigma_t_at(const SceneData* scene, int medium, float3 p) {
     return xyz(m->sigma_t);
 }
 
-inline float3 medium_sigma_s_at(const SceneData* scene, int medium, float3 p) {
-    __global const Medium* m = &scene->media[medium - 1];
-#ifdef HAS_MEDIUM_GRIDS
-    if (medium_is_grid(m)) return xyz(m->sigma_s) * grid_density(scene, m, p);
-#endif
-    return xyz(m->sigma_s);
-}
 
 /* The medium a ray enters when it leaves a surface of `material` toward w (ng: the triangle's
  * geometric normal, whose side is the exterior). */
@@ -163,20 +156,22 @@ inline void cross_interface(const SceneData* scene, const Hit* hit, float3 d, fl
  * a random walk along the segment toward v multiplies v's area density by. */
 inline float segment_distance_density(const SceneData* scene, float3 w, const PathVertex* v) {
     if (v->type != VERTEX_MEDIUM) return mean3(w);
-    return mean3(w * medium_sigma_t_at(scene, v->medium, v->p));
+    return mean3(w * (xyz(scene->media[v->medium - 1].sigma_t) * v->density));
 }
 
-/* What a segment gathers on its way: W per channel (the top of this file), and the tentative
- * collisions drawn in grid media. */
+/* What a segment gathers on its way: W per channel (the top of this file), the tentative
+ * collisions drawn in grid media, and the density where it scattered (1 if homogeneous). */
 typedef struct {
     float3 weight;
     uint events;
+    float density;
 } SegmentTally;
 
 inline SegmentTally segment_tally_begin(void) {
     SegmentTally s;
     s.weight = (float3)(1.0f);
     s.events = 0u;
+    s.density = 1.0f;
     return s;
 }
 
@@ -206,11 +201,13 @@ inline int trace_through_media(const SceneData* scene, const Rng* rng, uint stre
                 while (t + tau / majorant < t1) {
                     t += tau / majorant;
                     float3 p = *o + d * t;
-                    float3 sigma_t = medium_sigma_t_at(scene, *medium, p);
+                    float density = grid_density(scene, m, p);
+                    float3 sigma_t = xyz(m->sigma_t) * density;
                     uint k = 2u * tally->events;
                     if (++tally->events > MEDIUM_MAX_EVENTS) return SEGMENT_LOST;
                     if (rng_stream_value(rng, stream, k) * majorant < channel_of(sigma_t, channel)) {
                         *o = p;
+                        tally->density = density;
                         return SEGMENT_MEDIUM;
                     }
                     tally->weight *= ((float3)(majorant) - sigma_t) * (1.0f / majorant);

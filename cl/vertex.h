@@ -43,7 +43,9 @@ typedef struct {
                   radiance emitted at this point, map_Ke applied */
 #endif
 #ifdef HAS_MEDIA
-    int medium; /* medium vertex: its medium (1 + index) */
+    int medium;    /* medium vertex: its medium (1 + index) */
+    float density; /* medium vertex: the medium's density there (1 if homogeneous), looked up
+                      once where the walk scattered, not again by every connection to it */
     /* The distance-sampling densities of the segment from the previous vertex of the subpath
      * (cl/medium.h): of reaching this vertex along it (a factor of pdf_fwd), and of reaching
      * the previous vertex from this one (a factor of the previous vertex's pdf_rev). 1 where
@@ -79,6 +81,7 @@ inline PathVertex vertex_at(int type, float3 p, float3 ng, float p_error) {
     v.medium = 0;
     v.dist_fwd = 1.0f;
     v.dist_rev = 1.0f;
+    v.density = 1.0f;
 #endif
     return v;
 }

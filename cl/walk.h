@@ -85,6 +85,7 @@ inline int random_walk(const SceneData* scene, Rng* rng, float3 o, float3 d, flo
             *vertex = vertex_at(VERTEX_MEDIUM, o, (float3)(0.0f), 0.0f);
             vertex->wo = -d;
             vertex->medium = medium;
+            vertex->density = tally.density;
         } else if (found) {
             surface_vertex_from_hit(scene, prev, &hit, vertex);
         }
@@ -111,7 +112,7 @@ inline int random_walk(const SceneData* scene, Rng* rng, float3 o, float3 d, flo
         vertex->dist_rev = segment_distance_density(scene, tally.weight, prev);
         if (vertex->dist_fwd == 0.0f) break;
         float3 gain = tally.weight / vertex->dist_fwd;
-        if (segment == SEGMENT_MEDIUM) gain *= medium_sigma_s_at(scene, medium, vertex->p);
+        if (segment == SEGMENT_MEDIUM) gain *= xyz(scene->media[medium - 1].sigma_s) * vertex->density;
         beta *= gain;
 #endif
         vertex->beta = beta;
