@@ -73,7 +73,7 @@ inline float3 ggx_sample_wh(float2 u, float alpha) {
     float tan2 = alpha * alpha * u.x / (1.0f - u.x);
     float cos_theta = 1.0f / sqrt(1.0f + tan2);
     float sin_theta = sqrt(fmax(0.0f, 1.0f - cos_theta * cos_theta));
-    float2 cs = unit_circle(2.0f * PI_F * u.y);
+    float2 cs = unit_circle_turns(u.y);
     return (float3)(sin_theta * cs.x, sin_theta * cs.y, cos_theta);
 }
 

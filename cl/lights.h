@@ -98,7 +98,7 @@ inline float spot_falloff(__global const Light* light, float3 w) {
  * Directions: theta from +y (v = theta / pi), phi from +x toward +z (u = phi / 2 pi). */
 
 inline float3 env_direction(float2 uv) {
-    float2 theta_cs = unit_circle(uv.y * PI_F), phi_cs = unit_circle(uv.x * 2.0f * PI_F);
+    float2 theta_cs = unit_circle_turns(0.5f * uv.y), phi_cs = unit_circle_turns(uv.x);
     return (float3)(theta_cs.y * phi_cs.x, theta_cs.x, theta_cs.y * phi_cs.y);
 }
 
@@ -134,7 +134,7 @@ inline float environment_pdf_w(const SceneData* scene, float3 w) {
     __global const float* func = scene->env_distribution;
     float integral = func[width * height + height * (width + 1) + height + 1];
     float2 uv = env_uv(w);
-    float sin_theta = sin(uv.y * PI_F);
+    float sin_theta = unit_circle_turns(0.5f * uv.y).y;
     if (sin_theta == 0.0f || integral == 0.0f) return 0.0f;
     return (func[env_texel(scene, uv)] / integral) / (2.0f * PI_F * PI_F * sin_theta);
 #else
@@ -156,7 +156,7 @@ inline float3 environment_sample_direction(const SceneData* scene, float2 u, flo
     int x = find_interval(row, width, u.x);
     float du = (u.x - row[x]) / (row[x + 1] - row[x]);
     float2 uv = (float2)(((float)x + du) / (float)width, ((float)y + dv) / (float)height);
-    float sin_theta = sin(uv.y * PI_F);
+    float sin_theta = unit_circle_turns(0.5f * uv.y).y;
     *pdf_w = 0.0f;
     if (sin_theta == 0.0f || integral == 0.0f) return (float3)(0.0f, 1.0f, 0.0f);
     *pdf_w = (func[y * width + x] / integral) / (2.0f * PI_F * PI_F * sin_theta);

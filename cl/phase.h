@@ -36,7 +36,7 @@ inline float sample_phase_hg(float3 wo, float g, float2 u, float3* wi) {
     float3 s, t;
     float3 on = -wo;
     coordinate_system(on, &s, &t);
-    float2 cs = unit_circle(2.0f * PI_F * u.y);
+    float2 cs = unit_circle_turns(u.y);
     *wi = s * (sin_theta * cs.x) + t * (sin_theta * cs.y) + on * cos_theta;
     return pdf;
 }

@@ -8,15 +8,12 @@
 inline float2 sample_concentric_disk(float2 u) {
     float2 o = 2.0f * u - (float2)(1.0f, 1.0f);
     if (o.x == 0.0f && o.y == 0.0f) return (float2)(0.0f, 0.0f);
-    float r, theta;
-    if (fabs(o.x) > fabs(o.y)) {
-        r = o.x;
-        theta = (PI_F / 4.0f) * (o.y / o.x);
-    } else {
-        r = o.y;
-        theta = (PI_F / 2.0f) - (PI_F / 4.0f) * (o.x / o.y);
-    }
-    return r * unit_circle(theta);
+    /* The polar angle is pi/4 * (y/x) in the wedges about the x axis and pi/2 - pi/4 * (x/y) in
+     * those about the y axis, whose cosine and sine are the sine and cosine of pi/4 * (x/y): the
+     * angles stay within an octant (geometry.h). */
+    if (fabs(o.x) > fabs(o.y)) return o.x * unit_circle_octant((PI_F / 4.0f) * (o.y / o.x));
+    float2 cs = unit_circle_octant((PI_F / 4.0f) * (o.x / o.y));
+    return o.y * (float2)(cs.y, cs.x);
 }
 
 /* Cosine-weighted direction about +z; density cos(theta) / pi. */
@@ -31,7 +28,7 @@ inline float cosine_hemisphere_pdf(float cos_theta) { return fmax(cos_theta, 0.0
 inline float3 sample_uniform_sphere(float2 u) {
     float z = 1.0f - 2.0f * u.x;
     float r = sqrt(fmax(0.0f, 1.0f - z * z));
-    float2 cs = unit_circle(2.0f * PI_F * u.y);
+    float2 cs = unit_circle_turns(u.y);
     return (float3)(r * cs.x, r * cs.y, z);
 }
 
@@ -41,7 +38,7 @@ inline float3 sample_uniform_sphere(float2 u) {
 inline float3 sample_uniform_cone(float2 u, float one_minus_cos_max) {
     float v = u.x * one_minus_cos_max;
     float sin_theta = sqrt(fmax(0.0f, v * (2.0f - v)));
-    float2 cs = unit_circle(u.y * 2.0f * PI_F);
+    float2 cs = unit_circle_turns(u.y);
     return (float3)(cs.x * sin_theta, cs.y * sin_theta, 1.0f - v);
 }
 

@@ -46,3 +46,9 @@ __kernel void find_interval_test(__global const float* cdf, int n, __global cons
     int gid = get_global_id(0);
     out[gid] = find_interval(cdf, n, u[gid]);
 }
+
+/* out[i] = (unit_circle_turns(u[i]), unit_circle_octant(a[i])): (cos, sin, cos, sin). */
+__kernel void unit_circle_test(__global const float* u, __global const float* a, __global float4* out) {
+    int gid = get_global_id(0);
+    out[gid] = (float4)(unit_circle_turns(u[gid]), unit_circle_octant(a[gid]));
+}
