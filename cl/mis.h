@@ -57,13 +57,17 @@ inline float mis_weight(const SceneData* scene, const StrategyMix* mix, const Pa
 
     /* The endpoints are connected deterministically, so neither is a delta vertex of this
      * path; their reverse densities and those of their predecessors follow the connection. */
+    /* Only those the recursions below reach (a path tracer's never reach past pt, a light
+     * tracer's never reach the light side). */
+    int camera_steps = min(t - 1, STRATEGY_MAX_LIGHT_VERTICES - s);
+    int light_steps = min(s, STRATEGY_MAX_CAMERA_VERTICES - t);
     float pt_pdf_rev = 0.0f, pt_minus_pdf_rev = 0.0f, qs_pdf_rev = 0.0f, qs_minus_pdf_rev = 0.0f;
-    if (t > 0)
+    if (camera_steps >= 1)
         pt_pdf_rev = s > 0 ? vertex_pdf(scene, &qs, qs_minus, &pt) : vertex_pdf_light_origin(scene, &pt, pt_minus);
-    if (pt_minus)
+    if (camera_steps >= 2)
         pt_minus_pdf_rev = s > 0 ? vertex_pdf(scene, &pt, &qs, pt_minus) : vertex_pdf_light(scene, &pt, pt_minus);
-    if (s > 0) qs_pdf_rev = vertex_pdf(scene, &pt, pt_minus, &qs);
-    if (qs_minus) qs_minus_pdf_rev = vertex_pdf(scene, &qs, &pt, qs_minus);
+    if (light_steps >= 1) qs_pdf_rev = vertex_pdf(scene, &pt, pt_minus, &qs);
+    if (light_steps >= 2) qs_minus_pdf_rev = vertex_pdf(scene, &qs, &pt, qs_minus);
 #ifdef HAS_MEDIA
     /* A density toward a vertex through a medium includes the segment's distance sampling: the
      * connection's own for the endpoints, the subpath's stored one for their predecessors. */
@@ -80,7 +84,7 @@ inline float mis_weight(const SceneData* scene, const StrategyMix* mix, const Pa
      * is a convention when vertex i+1 is a delta vertex of the subpath (the connection's pt is
      * not), its forward density when vertex i-1 is. */
     float ri = 1.0f;
-    for (int i = t - 1; i > 0; --i) {
+    for (int i = t - 1; i >= t - camera_steps; --i) {
         float pdf_rev = i == t - 1 ? pt_pdf_rev : (i == t - 2 ? pt_minus_pdf_rev : camera_path[i].pdf_rev);
         float pdf_fwd = i == t - 1 ? pt.pdf_fwd : camera_path[i].pdf_fwd;
         int delta = i == t - 1 ? 0 : camera_path[i].delta;
@@ -94,7 +98,7 @@ inline float mis_weight(const SceneData* scene, const StrategyMix* mix, const Pa
      * the light vertex's own densities are conventions for a delta light as well (a point's
      * position, a direction's direction). */
     ri = 1.0f;
-    for (int i = s - 1; i >= 0; --i) {
+    for (int i = s - 1; i >= s - light_steps; --i) {
         float pdf_rev = i == s - 1 ? qs_pdf_rev : (i == s - 2 ? qs_minus_pdf_rev : light_path[i].pdf_rev);
         float pdf_fwd = i == s - 1 ? qs.pdf_fwd : light_path[i].pdf_fwd;
         int delta = i == s - 1 ? 0 : light_path[i].delta;

@@ -56,6 +56,31 @@ inline float strategy_sample_count(const StrategyMix* mix, int s, int t) {
 #endif
 }
 
+/* Bounds on the enabled strategies' vertex counts that the integrator fixes when the kernel is
+ * built: a path tracer's strategies have at most one light vertex, a light tracer's exactly one
+ * camera vertex. The MIS ratio recursion (cl/mis.h) stops where they end instead of walking
+ * the rest of the path for terms that are all disabled. */
+#if INTEGRATOR == INTEGRATOR_PT
+#define STRATEGY_MAX_LIGHT_VERTICES 1
+#else
+#define STRATEGY_MAX_LIGHT_VERTICES 0x7fffffff
+#endif
+#if INTEGRATOR == INTEGRATOR_LT
+#define STRATEGY_MAX_CAMERA_VERTICES 1
+#else
+#define STRATEGY_MAX_CAMERA_VERTICES 0x7fffffff
+#endif
+
+/* Whether the MIS weights read the reverse densities (pdf_rev) that the random walks store in
+ * subpath vertices. With the bounds above a path tracer's and a light tracer's weights need only
+ * the connection's own reverse densities, so their walks skip the second BSDF evaluation per
+ * bounce that a subpath's reverse densities cost. */
+#if INTEGRATOR == INTEGRATOR_BDPT
+#define STRATEGIES_READ_SUBPATH_PDF_REV 1
+#else
+#define STRATEGIES_READ_SUBPATH_PDF_REV 0
+#endif
+
 /* light_is_area: whether the path's emitter is an area light (only then is (1,1) possible). */
 inline int strategy_enabled(const StrategyMix* mix, int s, int t, int light_is_area) {
     if (t < 1 || s + t < 2) return 0;

@@ -8,6 +8,7 @@
 
 #include "rng.h"
 #include "sample_dimensions.h"
+#include "strategies.h"
 #include "vertex.h"
 #ifdef HAS_MEDIA
 #include "medium.h"
@@ -120,11 +121,15 @@ inline int random_walk(const SceneData* scene, Rng* rng, float3 o, float3 d, flo
          * predecessor's reverse density, both from the positions (see above). */
         if (i > start && !prev->delta) {
             float3 w = normalize(vertex->p - prev->p);
+#if STRATEGIES_READ_SUBPATH_PDF_REV
             float pdf_rev;
             vertex_scatter_pdfs(scene, prev, prev->wo, w, &pdf_fwd, &pdf_rev);
             path[i - 2].pdf_rev = convert_density(scene, prev, pdf_rev, &path[i - 2]);
 #ifdef HAS_MEDIA
             path[i - 2].pdf_rev *= prev->dist_rev;
+#endif
+#else
+            pdf_fwd = vertex_scatter_pdf(scene, prev, prev->wo, w);
 #endif
         }
         vertex->pdf_fwd = convert_density(scene, prev, pdf_fwd, vertex);
