@@ -18,7 +18,13 @@
 #define MAX_DEPTH 5
 #endif
 
+/* Splat records per item: one per light subpath vertex. A path tracer has no t = 1 strategy,
+ * so nothing of its lands elsewhere: it has none (the host sizes the buffer the same way). */
+#if INTEGRATOR == INTEGRATOR_PT
+#define SPLAT_SLOTS 0
+#else
 #define SPLAT_SLOTS (MAX_DEPTH + 1)
+#endif
 
 /* --strategy-images: every (s, t) contribution is also recorded in its own slot
  * s * STRATEGY_STRIDE + t (own pixel for t > 1, the splat's for t = 1). */

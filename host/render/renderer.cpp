@@ -83,7 +83,9 @@ Renderer::Renderer(DeviceContext& device, const DeviceScene& scene, const Render
         kernel_ = cl::Kernel(build.program, "render_bdpt");
         cl::Context& ctx = device.context();
         if (!scene_buffers_) scene_buffers_ = std::make_shared<SceneBuffers>(ctx, scene);
-        splat_slots_ = options.max_depth + 1;
+        // One splat record per light subpath vertex; none for a path tracer (SPLAT_SLOTS in
+        // cl/kernels/render.cl).
+        splat_slots_ = options.integrator == Integrator::Pt ? 0 : options.max_depth + 1;
         const size_t bytes_per_item = sizeof(cl_float4) + sizeof(SplatRecord) * size_t(splat_slots_ + strategy_slots_);
         const int pixels = scene.camera.width * scene.camera.height;
         size_t limit = std::min<size_t>(kMaxBatchBytes, device.entry().max_alloc) / bytes_per_item;
@@ -91,7 +93,8 @@ Renderer::Renderer(DeviceContext& device, const DeviceScene& scene, const Render
         if (options.batch_items > 0) batch_items_ = std::min(batch_items_, options.batch_items);
         batch_items_ = std::max(batch_items_, 1);
         camera_out_ = cl::Buffer(ctx, CL_MEM_WRITE_ONLY, sizeof(cl_float4) * batch_items_);
-        splats_ = cl::Buffer(ctx, CL_MEM_WRITE_ONLY, sizeof(SplatRecord) * size_t(batch_items_) * splat_slots_);
+        splats_ = cl::Buffer(ctx, CL_MEM_WRITE_ONLY,
+                             sizeof(SplatRecord) * std::max<size_t>(1, size_t(batch_items_) * splat_slots_));
         if (strategy_slots_ > 0) {
             strategy_out_ = cl::Buffer(ctx, CL_MEM_WRITE_ONLY, sizeof(SplatRecord) * size_t(batch_items_) * strategy_slots_);
             strategy_host_.resize(size_t(batch_items_) * strategy_slots_);
@@ -166,8 +169,10 @@ void Renderer::run_batch(Film& film, const PassSpec& pass, int first_item, int i
         }
         queue.enqueueReadBuffer(camera_out_, CL_FALSE, 0, sizeof(cl_float4) * item_count, camera_host_.data(), nullptr,
                                 &camera_read);
-        queue.enqueueReadBuffer(splats_, CL_TRUE, 0, sizeof(SplatRecord) * size_t(item_count) * splat_slots_,
-                                splats_host_.data(), nullptr, &splats_read);
+        if (splat_slots_ > 0)
+            queue.enqueueReadBuffer(splats_, CL_FALSE, 0, sizeof(SplatRecord) * size_t(item_count) * splat_slots_,
+                                    splats_host_.data(), nullptr, &splats_read);
+        queue.finish();
         if (strategy_slots_ > 0)
             queue.enqueueReadBuffer(strategy_out_, CL_TRUE, 0,
                                     sizeof(SplatRecord) * size_t(item_count) * strategy_slots_, strategy_host_.data(),
@@ -178,7 +183,8 @@ void Renderer::run_batch(Film& film, const PassSpec& pass, int first_item, int i
                                      e.getProfilingInfo<CL_PROFILING_COMMAND_START>());
             };
             stats_.profile.kernel_seconds += seconds(kernel_done);
-            stats_.profile.transfer_seconds += seconds(camera_read) + seconds(splats_read);
+            stats_.profile.transfer_seconds += seconds(camera_read);
+            if (splat_slots_ > 0) stats_.profile.transfer_seconds += seconds(splats_read);
             if (strategy_slots_ > 0) stats_.profile.transfer_seconds += seconds(strategies_read);
         }
     } catch (const cl::Error& e) {
