@@ -13,7 +13,8 @@
 inline float2 unit_circle_octant(float a) {
     float z = a * a;
     float s = a + a * z * (-1.6666654611e-1f + z * (8.3321608736e-3f + z * -1.9515295891e-4f));
-    float c = 1.0f - 0.5f * z + z * z * (4.166664568298827e-2f + z * (-1.388731625493765e-3f + z * 2.443315711809948e-5f));
+    float c = 1.0f - 0.5f * z +
+              z * z * (4.166664568298827e-2f + z * (-1.388731625493765e-3f + z * 2.443315711809948e-5f));
     return (float2)(c, s);
 }
 

@@ -56,9 +56,10 @@ inline float mis_weight(const SceneData* scene, const StrategyMix* mix, const Pa
     int light_is_area = emitter->type == VERTEX_SURFACE || vertex_light_kind(scene, emitter) == LIGHT_AREA;
 
     /* The endpoints are connected deterministically, so neither is a delta vertex of this
-     * path; their reverse densities and those of their predecessors follow the connection. */
-    /* Only those the recursions below reach (a path tracer's never reach past pt, a light
-     * tracer's never reach the light side). */
+     * path; their reverse densities and those of their predecessors follow the connection.
+     * Only those that the recursions below reach are evaluated: the recursions stop where the
+     * integrator's strategies end (a path tracer's never pass pt, a light tracer's never enter
+     * the light side). */
     int camera_steps = min(t - 1, STRATEGY_MAX_LIGHT_VERTICES - s);
     int light_steps = min(s, STRATEGY_MAX_CAMERA_VERTICES - t);
     float pt_pdf_rev = 0.0f, pt_minus_pdf_rev = 0.0f, qs_pdf_rev = 0.0f, qs_minus_pdf_rev = 0.0f;
