@@ -128,7 +128,6 @@ inline float3 medium_sigma_t_at(const SceneData* scene, int medium, float3 p) {
     return xyz(m->sigma_t);
 }
 
-
 /* The medium a ray enters when it leaves a surface of `material` toward w (ng: the triangle's
  * geometric normal, whose side is the exterior). */
 inline int medium_beyond(const SceneData* scene, int material, float3 ng, float3 w) {

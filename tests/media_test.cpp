@@ -27,14 +27,8 @@ namespace {
 // comparison (about 15 comparisons here: a correct renderer fails one with probability ~2e-3;
 // the seeds are fixed, so a pass stays a pass).
 constexpr double kSigmas = 4.5;
-constexpr int kBlocks = 4;
 constexpr int kFilm = 32;
 constexpr double kPi = 3.14159265358979323846;
-
-RegionStats render(const DeviceScene& scene, Integrator integrator, int depth, uint32_t seed, int passes,
-                   const std::string& what, int blocks = kBlocks) {
-    return render_regions(scene, integrator, depth, seed, passes, what, blocks);
-}
 
 // ---- Closed forms ---------------------------------------------------------------------------
 
@@ -53,7 +47,7 @@ TEST(Media, BeerLambertThroughAnAbsorbingSlab) {
     for (int c = 0; c < 3; ++c) expected += le[c] * std::exp(-double(sigma[c]) * 0.5) / 3.0;
     for (Integrator integrator : {Integrator::Bdpt, Integrator::Pt, Integrator::Lt}) {
         std::string name = integrator_name(integrator);
-        RegionStats r = render(scene, integrator, 2, 301, 16, "slab " + name);
+        RegionStats r = render_regions(scene, integrator, 2, 301, 16, "slab " + name);
         // Floor: the 6e-4 of the slant, plus float rounding.
         expect_matches(r, expected, kSigmas, "Beer-Lambert " + name, 1e-3);
     }
@@ -137,7 +131,7 @@ TEST_P(VolumetricFurnaceTest, EveryPixelIsTheEscapeProbability) {
     // a camera ray can find (a light subpath cannot connect to a point at infinity).
     for (Integrator integrator : {Integrator::Bdpt, Integrator::Pt}) {
         std::string name = integrator_name(integrator);
-        RegionStats r = render(scene, integrator, depth, 311 + uint32_t(integrator), 32, "furnace " + name, 2);
+        RegionStats r = render_regions(scene, integrator, depth, 311 + uint32_t(integrator), 32, "furnace " + name, 2);
         // The simulation's own standard error joins the render's through the floor.
         expect_matches(r, expected, kSigmas, "volumetric furnace tau " + std::to_string(c.tau) + " " + name,
                        se / expected + 1e-5);
@@ -156,12 +150,12 @@ INSTANTIATE_TEST_SUITE_P(Thickness, VolumetricFurnaceTest,
 // image mean is above min_mean; seeds seed, seed + 1, seed + 2.
 void expect_estimators_agree(const DeviceScene& scene, int depth, uint32_t seed, int passes, const std::string& name,
                              bool with_lt = true, double min_mean = 0.01) {
-    RegionStats bdpt = render(scene, Integrator::Bdpt, depth, seed, passes, name + " bdpt");
-    RegionStats pt = render(scene, Integrator::Pt, depth, seed + 1, passes, name + " pt");
+    RegionStats bdpt = render_regions(scene, Integrator::Bdpt, depth, seed, passes, name + " bdpt");
+    RegionStats pt = render_regions(scene, Integrator::Pt, depth, seed + 1, passes, name + " pt");
     ASSERT_GT(bdpt.image_mean, min_mean) << name;
     expect_agree(pt, bdpt, kSigmas, name + " pt vs bdpt");
     if (!with_lt) return;
-    RegionStats lt = render(scene, Integrator::Lt, depth, seed + 2, passes, name + " lt");
+    RegionStats lt = render_regions(scene, Integrator::Lt, depth, seed + 2, passes, name + " lt");
     expect_agree(lt, bdpt, kSigmas, name + " lt vs bdpt");
 }
 
