@@ -20,39 +20,17 @@ constexpr int kMaxBatchItems = 1 << 18;
 // there (measured: the same samples/s at 1, 4 and 16 as with the driver's choice at depth 5).
 constexpr int kCpuLocalSize = 16;
 
+// A launch that takes longer than this makes the following ones smaller: a GPU driver's
+// watchdog kills long launches (about 2 s on some), and a long launch delays the progress bar
+// and the reaction to an interrupt.
+constexpr double kMaxLaunchSeconds = 0.25;
+// ... but launches no smaller than this many work-groups, which keep a device busy.
+constexpr int kMinLaunchGroups = 64;
+
 // render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, camera_out, splats)
 constexpr cl_uint kParamsArg = SceneBuffers::kSceneArgCount;
 
 }  // namespace
-
-void Film::add(const Film& other) {
-    for (size_t i = 0; i < camera_sum.size(); ++i) camera_sum[i] += other.camera_sum[i];
-    for (size_t i = 0; i < light_sum.size(); ++i) light_sum[i] += other.light_sum[i];
-    if (!other.strategy_sum.empty()) {
-        if (strategy_sum.empty()) {
-            strategy_sum.assign(other.strategy_sum.size(), 0.0);
-            strategy_stride = other.strategy_stride;
-        }
-        for (size_t i = 0; i < strategy_sum.size(); ++i) strategy_sum[i] += other.strategy_sum[i];
-    }
-    spp += other.spp;
-}
-
-std::vector<float> Film::image() const {
-    std::vector<float> out(camera_sum.size());
-    const double inv = spp > 0 ? 1.0 / spp : 0.0;
-    for (size_t i = 0; i < out.size(); ++i) out[i] = float((camera_sum[i] + light_sum[i]) * inv);
-    return out;
-}
-
-std::vector<float> Film::strategy_image(int s, int t) const {
-    const size_t pixels = size_t(width) * height;
-    const size_t base = (size_t(s) * strategy_stride + t) * pixels * 3;
-    std::vector<float> out(pixels * 3);
-    const double inv = spp > 0 ? 1.0 / spp : 0.0;
-    for (size_t i = 0; i < out.size(); ++i) out[i] = float(strategy_sum[base + i] * inv);
-    return out;
-}
 
 Renderer::Renderer(DeviceContext& device, const DeviceScene& scene, const RenderOptions& options,
                    std::shared_ptr<SceneBuffers> buffers)
@@ -82,7 +60,10 @@ Renderer::Renderer(DeviceContext& device, const DeviceScene& scene, const Render
     try {
         kernel_ = cl::Kernel(build.program, "render_bdpt");
         cl::Context& ctx = device.context();
-        if (!scene_buffers_) scene_buffers_ = std::make_shared<SceneBuffers>(ctx, scene);
+        if (!scene_buffers_) {
+            check_scene_fits_device(scene, device.entry());
+            scene_buffers_ = std::make_shared<SceneBuffers>(ctx, scene);
+        }
         // One splat record per light subpath vertex; none for a path tracer (SPLAT_SLOTS in
         // cl/kernels/render.cl).
         splat_slots_ = options.integrator == Integrator::Pt ? 0 : options.max_depth + 1;
@@ -92,6 +73,7 @@ Renderer::Renderer(DeviceContext& device, const DeviceScene& scene, const Render
         batch_items_ = int(std::min<size_t>({size_t(pixels), size_t(kMaxBatchItems), limit}));
         if (options.batch_items > 0) batch_items_ = std::min(batch_items_, options.batch_items);
         batch_items_ = std::max(batch_items_, 1);
+        launch_items_ = batch_items_;
         camera_out_ = cl::Buffer(ctx, CL_MEM_WRITE_ONLY, sizeof(cl_float4) * batch_items_);
         splats_ = cl::Buffer(ctx, CL_MEM_WRITE_ONLY,
                              sizeof(SplatRecord) * std::max<size_t>(1, size_t(batch_items_) * splat_slots_));
@@ -138,7 +120,7 @@ void Renderer::set_strategy_mix(float light_subpaths, bool inner_connections) {
     options_.inner_connections = inner_connections;
 }
 
-void Renderer::run_batch(Film& film, const PassSpec& pass, int first_item, int item_count) {
+RenderParams Renderer::batch_params(const PassSpec& pass, int first_item, int item_count) const {
     RenderParams params{};
     params.width = scene_.camera.width;
     params.height = scene_.camera.height;
@@ -154,6 +136,10 @@ void Renderer::run_batch(Film& film, const PassSpec& pass, int first_item, int i
     const bool bdpt = options_.integrator == Integrator::Bdpt;
     params.light_subpaths = bdpt ? options_.light_subpaths : 1.0f;
     params.inner_connections = bdpt ? (options_.inner_connections ? 1 : 0) : 1;
+    return params;
+}
+
+void Renderer::launch_and_read_back(const RenderParams& params, int item_count) {
     cl::CommandQueue& queue = device_.queue();
     cl::Event kernel_done, camera_read, splats_read, strategies_read;
     try {
@@ -172,11 +158,11 @@ void Renderer::run_batch(Film& film, const PassSpec& pass, int first_item, int i
         if (splat_slots_ > 0)
             queue.enqueueReadBuffer(splats_, CL_FALSE, 0, sizeof(SplatRecord) * size_t(item_count) * splat_slots_,
                                     splats_host_.data(), nullptr, &splats_read);
-        queue.finish();
         if (strategy_slots_ > 0)
-            queue.enqueueReadBuffer(strategy_out_, CL_TRUE, 0,
+            queue.enqueueReadBuffer(strategy_out_, CL_FALSE, 0,
                                     sizeof(SplatRecord) * size_t(item_count) * strategy_slots_, strategy_host_.data(),
                                     nullptr, &strategies_read);
+        queue.finish();
         if (device_.profiling()) {
             auto seconds = [](const cl::Event& e) {
                 return 1e-9 * double(e.getProfilingInfo<CL_PROFILING_COMMAND_END>() -
@@ -191,44 +177,57 @@ void Renderer::run_batch(Film& film, const PassSpec& pass, int first_item, int i
         throw Error(std::string("OpenCL: ") + e.what() + ": " + cl_error_name(e.err()) + " while rendering on " +
                     device_.entry().name);
     }
-    const auto accumulate_start = std::chrono::steady_clock::now();
-    const int width = params.width;
+}
+
+bool Renderer::sample_is_finite(int item) const {
+    // The kernel names the first strategy that gave a non-finite value in w
+    // (cl/kernels/render.cl); a sum that overflowed is caught here as well.
+    const cl_float4& c = camera_host_[size_t(item)];
+    if (!(c.s[3] >= 0 && std::isfinite(c.s[0]) && std::isfinite(c.s[1]) && std::isfinite(c.s[2]))) return false;
+    const SplatRecord* splats = &splats_host_[size_t(item) * splat_slots_];
+    for (int k = 0; k < splat_slots_; ++k)
+        if (splats[k].pixel >= 0 &&
+            !(std::isfinite(splats[k].r) && std::isfinite(splats[k].g) && std::isfinite(splats[k].b)))
+            return false;
+    return true;
+}
+
+void Renderer::drop_sample(int item, int pixel, const PassSpec& pass) {
+    const cl_float4& c = camera_host_[size_t(item)];
+    DroppedSample d;
+    d.x = pixel % scene_.camera.width;
+    d.y = pixel / scene_.camera.width;
+    d.sample = pass.sample_index;
+    if (c.s[3] < 0) {
+        const int strategy = int(-1.0f - c.s[3]), stride = options_.max_depth + 3;
+        d.s = strategy / stride;
+        d.t = strategy % stride;
+    }
+    if (!options_.drop_non_finite)
+        throw Error("non-finite radiance at pixel (" + std::to_string(d.x) + ", " + std::to_string(d.y) + ") sample " +
+                    std::to_string(d.sample) +
+                    (d.s >= 0 ? " from strategy s=" + std::to_string(d.s) + " t=" + std::to_string(d.t) : "") +
+                    " (a bug: please report it with the scene)");
+    ++stats_.dropped_samples;
+    if (stats_.first_dropped.size() < RenderStats::kFirstDropped) stats_.first_dropped.push_back(d);
+}
+
+void Renderer::accumulate(Film& film, const PassSpec& pass, int first_item, int item_count) {
     std::vector<bool> dropped(size_t(item_count), false);
     for (int i = 0; i < item_count; ++i) {
-        const cl_float4& c = camera_host_[i];
-        const SplatRecord* splats = &splats_host_[size_t(i) * splat_slots_];
-        // A sample with any non-finite value: the kernel names the first strategy that gave
-        // one in w (cl/kernels/render.cl); a sum that overflowed is caught here as well.
-        bool finite = c.s[3] >= 0 && std::isfinite(c.s[0]) && std::isfinite(c.s[1]) && std::isfinite(c.s[2]);
-        for (int k = 0; k < splat_slots_ && finite; ++k)
-            finite = splats[k].pixel < 0 || (std::isfinite(splats[k].r) && std::isfinite(splats[k].g) &&
-                                             std::isfinite(splats[k].b));
-        const int pixel = render_item_pixel(first_item + i, width, pass.pixel_stride);
-        if (!finite) {
-            DroppedSample d;
-            d.x = pixel % width;
-            d.y = pixel / width;
-            d.sample = pass.sample_index;
-            if (c.s[3] < 0) {
-                const int strategy = int(-1.0f - c.s[3]), stride = options_.max_depth + 3;
-                d.s = strategy / stride;
-                d.t = strategy % stride;
-            }
-            if (!options_.drop_non_finite)
-                throw Error("non-finite radiance at pixel (" + std::to_string(d.x) + ", " + std::to_string(d.y) +
-                            ") sample " + std::to_string(d.sample) +
-                            (d.s >= 0 ? " from strategy s=" + std::to_string(d.s) + " t=" + std::to_string(d.t) : "") +
-                            " (a bug: please report it with the scene)");
-            ++stats_.dropped_samples;
-            if (stats_.first_dropped.size() < RenderStats::kFirstDropped) stats_.first_dropped.push_back(d);
+        const int pixel = render_item_pixel(first_item + i, scene_.camera.width, pass.pixel_stride);
+        if (!sample_is_finite(i)) {
+            drop_sample(i, pixel, pass);
             dropped[size_t(i)] = true;
             continue;
         }
+        const cl_float4& c = camera_host_[size_t(i)];
         double* dst = &film.camera_sum[size_t(pixel) * 3];
         dst[0] += c.s[0];
         dst[1] += c.s[1];
         dst[2] += c.s[2];
         stats_.rays += uint64_t(c.s[3]);
+        const SplatRecord* splats = &splats_host_[size_t(i) * splat_slots_];
         for (int k = 0; k < splat_slots_; ++k) {
             const SplatRecord& r = splats[k];
             if (r.pixel < 0) continue;
@@ -254,8 +253,25 @@ void Renderer::run_batch(Film& film, const PassSpec& pass, int first_item, int i
         }
     }
     stats_.samples += uint64_t(item_count);
+}
+
+void Renderer::run_batch(Film& film, const PassSpec& pass, int first_item, int item_count) {
+    const auto launch_start = std::chrono::steady_clock::now();
+    launch_and_read_back(batch_params(pass, first_item, item_count), item_count);
+    const auto accumulate_start = std::chrono::steady_clock::now();
+    limit_launch_size(std::chrono::duration<double>(accumulate_start - launch_start).count(), item_count);
+    accumulate(film, pass, first_item, item_count);
     stats_.profile.accumulate_seconds +=
         std::chrono::duration<double>(std::chrono::steady_clock::now() - accumulate_start).count();
+}
+
+void Renderer::limit_launch_size(double seconds, int item_count) {
+    // Only a full-sized launch says how long one takes; the image does not depend on the
+    // launch size (the host adds items in pixel order whatever the batches).
+    if (seconds <= kMaxLaunchSeconds || item_count < launch_items_) return;
+    const int granule = std::max(local_size_, 1);
+    const int shorter = int(double(launch_items_) * kMaxLaunchSeconds / seconds) / granule * granule;
+    launch_items_ = std::max(shorter, std::min(launch_items_, kMinLaunchGroups * granule));
 }
 
 void Renderer::render_passes(Film& film, uint32_t first_sample, int count) {
@@ -270,8 +286,10 @@ void Renderer::render_passes(Film& film, uint32_t first_sample, int count) {
 void Renderer::render_pass(Film& film, const PassSpec& pass) {
     if (pass.pixel_stride < 1) throw Error("pixel stride must be at least 1");
     const int items = render_item_count(scene_.camera.width, scene_.camera.height, pass.pixel_stride);
-    for (int first = 0; first < items; first += batch_items_)
-        run_batch(film, pass, first, std::min(batch_items_, items - first));
+    for (int first = 0, count; first < items; first += count) {
+        count = std::min(launch_items_, items - first);
+        run_batch(film, pass, first, count);
+    }
     ++film.spp;
 }
 

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "device/opencl.h"
+#include "film/film.h"
 #include "render/device_scene.h"
 #include "render/features.h"
 #include "render/scene_buffers.h"
@@ -42,24 +43,6 @@ struct RenderOptions {
     // Called now and then from the rendering thread: passes done, passes planned (0 if
     // time-bound), seconds so far.
     std::function<void(int, int, double)> progress;
-};
-
-// Image sums, kept apart so passes and devices merge exactly: image = camera / spp + light / spp.
-struct Film {
-    int width = 0;
-    int height = 0;
-    int spp = 0;
-    std::vector<double> camera_sum;  // rgb per pixel
-    std::vector<double> light_sum;   // rgb per pixel, t = 1 splats
-    // With strategy images: rgb per pixel for each (s, t), strategy_slot(s, t) major.
-    std::vector<double> strategy_sum;
-    int strategy_stride = 0;  // max_depth + 3
-
-    Film(int w, int h) : width(w), height(h), camera_sum(size_t(w) * h * 3), light_sum(size_t(w) * h * 3) {}
-    void add(const Film& other);  // merges sums and sample counts (another device's passes)
-    std::vector<float> image() const;
-    // The image of strategy (s, t) alone (sum / spp); requires strategy images.
-    std::vector<float> strategy_image(int s, int t) const;
 };
 
 // Where a render's time goes (--profile): the render kernel and the read-back of its outputs
@@ -138,7 +121,18 @@ public:
     const DeviceScene& scene() const { return scene_; }
 
 private:
+    // One launch of the render kernel over items [first_item, first_item + item_count) of a
+    // pass, in four steps: its parameters, the launch and the read-back of its outputs, a
+    // smaller size for the following launches if this one took too long, and the host's
+    // accumulation of the outputs into the film.
     void run_batch(Film& film, const PassSpec& pass, int first_item, int item_count);
+    RenderParams batch_params(const PassSpec& pass, int first_item, int item_count) const;
+    void launch_and_read_back(const RenderParams& params, int item_count);
+    void limit_launch_size(double seconds, int item_count);
+    void accumulate(Film& film, const PassSpec& pass, int first_item, int item_count);
+    bool sample_is_finite(int item) const;
+    // Counts a sample with a non-finite value and leaves it out, or throws (drop_non_finite off).
+    void drop_sample(int item, int pixel, const PassSpec& pass);
 
     DeviceContext& device_;
     const DeviceScene& scene_;
@@ -147,7 +141,8 @@ private:
     cl::Kernel kernel_;
     std::shared_ptr<SceneBuffers> scene_buffers_;
     cl::Buffer camera_out_, splats_, strategy_out_;
-    int batch_items_ = 0;
+    int batch_items_ = 0;   // work items the output buffers hold
+    int launch_items_ = 0;  // work items per launch now (at most batch_items_)
     int local_size_ = 0;  // 0 = the driver's choice
     int zsobol_log2_spp_ = 0, zsobol_base4_digits_ = 0;
     int splat_slots_ = 0;

@@ -1,5 +1,9 @@
 #include "render/scene_buffers.h"
 
+#include <cstdio>
+
+#include "util/error.h"
+
 namespace clbdpt {
 
 namespace {
@@ -15,7 +19,48 @@ cl::Buffer upload(cl::Context& context, const std::vector<T>& data) {
                       const_cast<T*>(data.data()));
 }
 
+template <typename T>
+uint64_t bytes_of(const std::vector<T>& data) {
+    return uint64_t(sizeof(T)) * std::max<size_t>(data.size(), 1);
+}
+
+std::string gib(uint64_t bytes) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.2f GiB", double(bytes) / double(uint64_t(1) << 30));
+    return text;
+}
+
 }  // namespace
+
+void check_scene_fits_device(const DeviceScene& s, const DeviceEntry& device) {
+    const std::pair<const char*, uint64_t> buffers[] = {
+        {"BVH nodes", bytes_of(s.nodes)},
+        {"triangles", bytes_of(s.triangles)},
+        {"triangle materials", bytes_of(s.infos)},
+        {"vertex normals", bytes_of(s.normals)},
+        {"materials", bytes_of(s.materials)},
+        {"lights", bytes_of(s.lights)},
+        {"light distribution", bytes_of(s.light_cdf)},
+        {"environment map", bytes_of(s.env_texels)},
+        {"environment distribution", bytes_of(s.env_distribution)},
+        {"texture coordinates", bytes_of(s.uvs)},
+        {"textures", bytes_of(s.textures)},
+        {"texels", bytes_of(s.texels)},
+        {"media", bytes_of(s.media)},
+        {"density grids", bytes_of(s.densities)},
+    };
+    uint64_t total = 0;
+    for (const auto& [name, bytes] : buffers) {
+        total += bytes;
+        if (device.max_alloc > 0 && bytes > device.max_alloc)
+            throw Error("the scene's " + std::string(name) + " take " + gib(bytes) + ", more than the " +
+                        gib(device.max_alloc) + " device " + device.name +
+                        " can allocate at once (CL_DEVICE_MAX_MEM_ALLOC_SIZE)");
+    }
+    if (device.global_memory > 0 && total > device.global_memory)
+        throw Error("the scene takes " + gib(total) + ", more than device " + device.name + "'s " +
+                    gib(device.global_memory) + " of memory");
+}
 
 SceneBuffers::SceneBuffers(cl::Context& context, const DeviceScene& scene) : scene_(scene) {
     buffers_ = {upload(context, scene.nodes),     upload(context, scene.triangles), upload(context, scene.infos),

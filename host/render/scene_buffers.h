@@ -9,6 +9,11 @@
 
 namespace clbdpt {
 
+// Throws Error, before anything is uploaded, if a buffer of the scene exceeds the device's
+// largest allocation or the scene its global memory, naming the buffer and the sizes (an
+// upload that fails half-way gives only a driver's error code, or none until a launch).
+void check_scene_fits_device(const DeviceScene& scene, const DeviceEntry& device);
+
 class SceneBuffers {
 public:
     SceneBuffers(cl::Context& context, const DeviceScene& scene);

@@ -1,0 +1,31 @@
+// The film: per-pixel sums of a render's samples in double precision, kept apart by where they
+// come from so that passes, devices and resumed renders merge exactly:
+//   image = (camera_sum + light_sum) / spp
+// camera_sum gathers each pixel's own camera subpaths, light_sum the t = 1 splats that light
+// subpaths leave on any pixel. A pass adds one sample of every pixel and one to spp.
+#pragma once
+
+#include <cstddef>
+#include <vector>
+
+namespace clbdpt {
+
+struct Film {
+    int width = 0;
+    int height = 0;
+    int spp = 0;
+    std::vector<double> camera_sum;  // rgb per pixel
+    std::vector<double> light_sum;   // rgb per pixel, t = 1 splats
+    // With strategy images: rgb per pixel for each (s, t), strategy_slot(s, t) major.
+    std::vector<double> strategy_sum;
+    int strategy_stride = 0;  // max_depth + 3
+
+    Film() = default;
+    Film(int w, int h) : width(w), height(h), camera_sum(size_t(w) * h * 3), light_sum(size_t(w) * h * 3) {}
+    void add(const Film& other);  // merges sums and sample counts (another device's passes)
+    std::vector<float> image() const;
+    // The image of strategy (s, t) alone (sum / spp); requires strategy images.
+    std::vector<float> strategy_image(int s, int t) const;
+};
+
+}  // namespace clbdpt
