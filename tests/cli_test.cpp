@@ -12,45 +12,14 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "cli_test_util.h"
 #include "film/image_io.h"
 
 namespace {
 
+using namespace clbdpt_cli_test;
+
 namespace fs = std::filesystem;
-
-struct CommandResult {
-    int status = -1;
-    std::string output;  // stdout and stderr together
-};
-
-CommandResult run(const std::string& args, const std::string& env = "") {
-    CommandResult r;
-    std::string cmd = env + std::string(CLBDPT_BINARY) + " " + args + " 2>&1";
-    FILE* pipe = popen(cmd.c_str(), "r");
-    if (!pipe) return r;
-    std::array<char, 4096> buf;
-    size_t n;
-    while ((n = fread(buf.data(), 1, buf.size(), pipe)) > 0) r.output.append(buf.data(), n);
-    int st = pclose(pipe);
-    r.status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-    return r;
-}
-
-std::string data(const std::string& name) { return std::string(CLBDPT_TEST_DATA_DIR) + "/" + name; }
-
-class CliTest : public ::testing::Test {
-protected:
-    void SetUp() override {
-        dir_ = fs::temp_directory_path() / ("clbdpt_cli_" + std::to_string(::getpid()) + "_" +
-                                            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-        fs::remove_all(dir_);
-        fs::create_directories(dir_);
-    }
-    void TearDown() override { fs::remove_all(dir_); }
-    std::string out(const std::string& name) const { return (dir_ / name).string(); }
-    bool dir_is_empty() const { return fs::is_empty(dir_); }
-    fs::path dir_;
-};
 
 struct BadInput {
     const char* name;
@@ -78,10 +47,35 @@ TEST_F(CliTest, BadInputGivesOneErrorLineAndNoOutput) {
         {"film too large for memory", data("defaults.json") + " --spp 1 --width 32768 --height 32768 --strategy-images " +
                                           out("strategies"),
          "host memory"},
+        {"binary garbage OBJ", data("garbage.obj") + tiny, "garbage.obj"},
+        {"binary garbage JSON", data("garbage.json") + tiny, "garbage.json:"},
+        {"index beyond any integer", data("huge_index.obj") + tiny, "huge_index.obj:5:"},
+        {"negative index before the first vertex", data("negative_index.obj") + tiny, "negative_index.obj:5:"},
+        {"coordinate beyond float range", data("inf_vertex.obj") + tiny, "inf_vertex.obj:2:"},
+        {"non-UTF-8 path", data("no_such_\xff\xfe.obj") + tiny, "no_such_\xff\xfe.obj"},
+        {"path longer than the system allows", data(std::string(5000, 'a') + ".obj") + tiny, "aaaa.obj"},
+        {"a folder as the scene", std::string(CLBDPT_TEST_DATA_DIR) + tiny, "cannot open"},
+        {"missing output folder", data("defaults.json") + tiny, "no_such_folder"},
+        {"output folder that cannot be written", data("defaults.json") + tiny, "/proc/"},
+        {"kernel build failure", data("defaults.json") + tiny, "kernel build failed for kernels/render.cl"},
     };
+    // A kernel source that does not compile, read instead of the embedded one.
+    const fs::path broken_kernels = dir_.parent_path() / (dir_.filename().string() + "_kernels");
+    fs::create_directories(broken_kernels / "kernels");
+    std::ofstream(broken_kernels / "kernels/render.cl") << "#error this kernel is broken on purpose\n";
     for (const BadInput& c : cases) {
-        std::string output = std::string(c.name) == "unsupported output" ? out("image.xyz") : out("image.png");
-        CommandResult r = run("render " + c.args + " -o " + output + " --stats " + out("stats.json"));
+        const std::string name = c.name;
+        std::string output = name == "unsupported output"     ? out("image.xyz")
+                             : name == "missing output folder" ? out("no_such_folder/image.png")
+                             : name == "output folder that cannot be written" ? "/proc/clbdpt_test_image.png"
+                                                                              : out("image.png");
+        // The cache is bypassed so that the build really happens.
+        const std::string env = name == "kernel build failure" ? "CLBDPT_KERNEL_DIR=" + broken_kernels.string() +
+                                                                     " CLBDPT_CACHE_DIR=" + broken_kernels.string() + " "
+                                                               : "";
+        CommandResult r = run("render " + c.args + " -o " + output + " --stats " + out("stats.json"), env);
+        const size_t log_at = r.output.find("(whole log: ");
+        if (log_at != std::string::npos) fs::remove(r.output.substr(log_at + 12, r.output.find(')', log_at) - log_at - 12));
         EXPECT_NE(r.status, 0) << c.name << ": " << r.output;
         EXPECT_NE(r.output.find("clbdpt: error: "), std::string::npos) << c.name << ": " << r.output;
         EXPECT_NE(r.output.find(c.expected), std::string::npos) << c.name << ": " << r.output;
@@ -91,6 +85,7 @@ TEST_F(CliTest, BadInputGivesOneErrorLineAndNoOutput) {
             EXPECT_EQ(r.output.find('\n', err), r.output.size() - 1) << c.name << ": " << r.output;
         EXPECT_TRUE(dir_is_empty()) << c.name << ": left a file behind";
     }
+    fs::remove_all(broken_kernels);
 }
 
 TEST_F(CliTest, RenderWritesImageAndStats) {

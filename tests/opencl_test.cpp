@@ -227,11 +227,20 @@ TEST(Opencl, BuildFailureCarriesLog) {
 
     DeviceContext device(select_device(""));
     std::string message = error_message([&] { device.program("kernels/bad.cl", {}); });
-    EXPECT_EQ(message.rfind("kernel build failed for kernels/bad.cl on " + device.entry().name + ":\n", 0), 0u)
+    EXPECT_EQ(message.rfind("kernel build failed for kernels/bad.cl on " + device.entry().name + ": ", 0), 0u)
         << message;
+    // One line: the compiler's first error, and where the whole log went.
+    EXPECT_EQ(message.find('\n'), std::string::npos) << message;
     EXPECT_NE(message.find("undeclared_thing_xyz"), std::string::npos) << message;
     // The #line directives make the log name the real file.
     EXPECT_NE(message.find("bad.cl:2"), std::string::npos) << message;
+    const size_t log_at = message.find("(whole log: ");
+    ASSERT_NE(log_at, std::string::npos) << message;
+    const std::string log_path = message.substr(log_at + 12, message.size() - log_at - 13);
+    std::ifstream log(log_path);
+    std::string log_text((std::istreambuf_iterator<char>(log)), std::istreambuf_iterator<char>());
+    EXPECT_NE(log_text.find("undeclared_thing_xyz"), std::string::npos) << log_path;
+    std::remove(log_path.c_str());
 }
 
 TEST(Opencl, ProgramIsCachedOnDiskAndInProcess) {

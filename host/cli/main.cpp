@@ -13,16 +13,20 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "cli/interrupt.h"
 #include "device/opencl.h"
+#include "film/checkpoint.h"
 #include "film/image_io.h"
 #include "render/aov.h"
 #include "render/automatic_view.h"
 #include "render/device_scene.h"
 #include "render/features.h"
+#include "render/scene_fingerprint.h"
 #include "render/render_loop.h"
 #include "render/renderer.h"
 #include "render/strategy_pilot.h"
 #include "scene/scene.h"
+#include "util/atomic_file.h"
 #include "util/error.h"
 
 namespace clbdpt {
@@ -56,6 +60,9 @@ struct RenderArgs {
     float fov = 0;
     bool no_default_light = false;
     int debug_nan_pixel = -1;  // hidden: tests of the dropped-sample path
+    std::string checkpoint;         // --checkpoint FILE
+    double checkpoint_every = 60;   // seconds
+    std::string resume;             // --resume FILE
 };
 
 // Applies the command line's camera overrides. Where the scene's camera was automatic and only
@@ -108,22 +115,6 @@ std::string default_output(const std::string& scene_path) {
     size_t dot = name.find_last_of('.');
     if (dot != std::string::npos) name = name.substr(0, dot);
     return name + ".png";
-}
-
-void write_text_atomically(const std::string& path, const std::string& text) {
-    const std::string tmp = path + ".tmp-" + std::to_string(::getpid());
-    {
-        std::ofstream out(tmp);
-        out << text;
-        if (!out) {
-            std::remove(tmp.c_str());
-            throw Error("cannot write '" + path + "'");
-        }
-    }
-    if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-        std::remove(tmp.c_str());
-        throw Error("cannot write '" + path + "'");
-    }
 }
 
 class ProgressBar {
@@ -221,7 +212,48 @@ std::string choose_strategy_mix(DeviceContext& device, const DeviceScene& ds, Re
     return buf;
 }
 
+// The settings besides the scene that change the image, as one line of key=value pairs: a
+// checkpoint is resumed only under the same ones. spp and --time do not count (a render may
+// be resumed to more samples), except with zsobol, whose sample order depends on spp.
+std::string image_settings(const RenderArgs& args, const RenderOptions& options) {
+    std::ostringstream line;
+    line << "integrator=" << args.integrator << " light_subpaths=" << args.light_subpaths
+         << " connections=" << args.connections << " sampler=" << sampler_name(options.sampler)
+         << " max_depth=" << options.max_depth << " seed=" << options.seed << " all_features=" << options.all_features
+         << " strategy_images=" << int(options.strategy_images) << " debug_nan_pixel=" << options.debug_nan_pixel;
+    if (options.sampler == SamplerKind::ZSobol) line << " spp=" << options.spp;
+    return line.str();
+}
+
+// --resume: reads the checkpoint and checks that it belongs to this render and fits its spp.
+Checkpoint read_checkpoint_to_resume(const std::string& path, const CheckpointInfo& render, const RenderOptions& options,
+                                     int width, int height) {
+    Checkpoint c = read_checkpoint(path);
+    if (c.film.width != width || c.film.height != height)
+        throw Error("checkpoint '" + path + "' is of a " + std::to_string(c.film.width) + "x" +
+                    std::to_string(c.film.height) + " film, this render's is " + std::to_string(width) + "x" +
+                    std::to_string(height));
+    const std::vector<std::string> differences = settings_differences(c.info.settings, render.settings);
+    if (!differences.empty()) {
+        std::string list;
+        for (const std::string& d : differences) list += (list.empty() ? "" : ", ") + d;
+        throw Error("checkpoint '" + path + "' is of a render with other settings (" + list +
+                    "); resume with the ones it was started with");
+    }
+    if (c.info.scene_fingerprint != render.scene_fingerprint)
+        throw Error("checkpoint '" + path +
+                    "' is of another scene (its meshes, materials, lights, media or camera differ from this one's)");
+    if (options.time_budget <= 0 && c.film.spp > options.spp)
+        throw Error("checkpoint '" + path + "' holds " + std::to_string(c.film.spp) + " spp, more than --spp " +
+                    std::to_string(options.spp));
+    if (c.info.integrator < int(Integrator::Bdpt) || c.info.integrator > int(Integrator::Lt) ||
+        !(c.info.light_subpaths >= 0.0f && c.info.light_subpaths <= 1.0f))
+        throw Error("checkpoint '" + path + "' is not usable: its strategy mix is damaged");
+    return c;
+}
+
 int run_render(const RenderArgs& args) {
+    install_interrupt_handlers();
     LoadOptions load_options;
     load_options.default_light = !args.no_default_light;
     using Clock = std::chrono::steady_clock;
@@ -235,6 +267,9 @@ int run_render(const RenderArgs& args) {
     const std::string output = args.output.empty() ? default_output(args.scene) : args.output;
     if (!is_supported_output(output))
         throw Error("unsupported output format '" + output + "' (use .exr, .png, .jpg or .tif)");
+    // Every file the render will write, checked before it starts.
+    for (const std::string& path : {output, args.stats, args.checkpoint.empty() ? args.resume : args.checkpoint})
+        if (!path.empty()) check_can_write(path);
     const int width = args.width > 0 ? args.width : scene.width;
     const int height = args.height > 0 ? args.height : scene.height;
     check_film_fits_in_memory(width, height, args.strategy_images.empty() ? 0 : (args.max_depth >= 0 ? args.max_depth : scene.render.max_depth));
@@ -302,6 +337,25 @@ int run_render(const RenderArgs& args) {
     meta.strings.push_back({"clbdpt:scene", args.scene});
     meta.strings.push_back({"clbdpt:device", device_names});
 
+    if (aov >= 0 && !(args.checkpoint.empty() && args.resume.empty()))
+        throw Error("--checkpoint and --resume apply to renders, not to --aov");
+    // A resumed render goes on checkpointing into the file it came from unless told otherwise.
+    const std::string checkpoint_path = !args.checkpoint.empty() ? args.checkpoint : args.resume;
+    CheckpointInfo checkpoint_info;
+    if (!checkpoint_path.empty()) {
+        checkpoint_info.scene_fingerprint = scene_fingerprint(ds);
+        checkpoint_info.settings = image_settings(args, options);
+    }
+    std::unique_ptr<Checkpoint> resumed;
+    if (!args.resume.empty()) {
+        resumed = std::make_unique<Checkpoint>(
+            read_checkpoint_to_resume(args.resume, checkpoint_info, options, width, height));
+        // The passes go on with the strategy mix they were rendered with (no pilot).
+        options.integrator = Integrator(resumed->info.integrator);
+        options.light_subpaths = resumed->info.light_subpaths;
+        options.inner_connections = resumed->info.inner_connections != 0;
+    }
+
     if (aov >= 0) {
         std::vector<float> rgb = render_aov(device, ds, aov);
         meta.strings.push_back({"clbdpt:aov", args.aov});
@@ -319,9 +373,10 @@ int run_render(const RenderArgs& args) {
 
     RenderStats pilot_stats;
     StrategyPilot pilot;
-    const std::string mix_note = automatic && !mix_by_hand
-                                     ? choose_strategy_mix(device, ds, &options, &pilot, &pilot_stats, &renderers)
-                                     : "";
+    const std::string mix_note =
+        resumed ? "as in checkpoint '" + args.resume + "' (" + std::to_string(resumed->film.spp) + " spp resumed)"
+        : automatic && !mix_by_hand ? choose_strategy_mix(device, ds, &options, &pilot, &pilot_stats, &renderers)
+                                    : "";
     const bool run_pilot = pilot.seconds > 0;
     for (size_t i = renderers.size(); i < devices.size(); ++i) {
         auto& d = devices[i];
@@ -338,9 +393,33 @@ int run_render(const RenderArgs& args) {
                          d->entry().name.c_str(), rs.program_from_cache ? "loaded from cache" : "built", rs.build_seconds);
         }
     }
+    checkpoint_info.integrator = int(options.integrator);
+    checkpoint_info.light_subpaths = options.light_subpaths;
+    checkpoint_info.inner_connections = options.inner_connections ? 1 : 0;
+    RenderSchedule schedule;
+    schedule.resume = resumed ? &resumed->film : nullptr;
+    schedule.stop_requested = [] { return interrupt_signal() != 0; };
+    if (!checkpoint_path.empty()) {
+        schedule.checkpoint_seconds = args.checkpoint_every;
+        // A checkpoint that cannot be written is a warning: the render goes on, and the one
+        // written at its end says whether the disk has recovered.
+        schedule.checkpoint = [&](const Film& snapshot) {
+            try {
+                write_checkpoint(checkpoint_path, checkpoint_info, snapshot);
+            } catch (const Error& e) {
+                std::fprintf(stderr, "\nclbdpt: warning: %s\n", e.what());
+            }
+        };
+    }
     RenderStats st;
     const double seconds_before_passes = seconds_since(start) - pilot.seconds;
-    Film film = render_image(renderer_list, options, &st);
+    Film film = render_image(renderer_list, options, &st, schedule);
+    const int interrupted_by = interrupt_signal();
+    if (interrupted_by != 0 && film.spp == 0) {
+        bar.finish();
+        std::fprintf(stderr, "clbdpt: interrupted before the first pass was done: nothing written\n");
+        return 128 + interrupted_by;
+    }
     if (run_pilot) {
         st.add(pilot_stats);
         st.program_from_cache = st.program_from_cache && pilot_stats.program_from_cache;
@@ -362,6 +441,7 @@ int run_render(const RenderArgs& args) {
     meta.strings.push_back({"clbdpt:seconds", std::to_string(st.seconds)});
     write_image(output, width, height, film.image(), meta);
     if (!args.strategy_images.empty()) write_strategy_images(args.strategy_images, film, options.max_depth, meta);
+    if (!checkpoint_path.empty()) write_checkpoint(checkpoint_path, checkpoint_info, film);
 
     const double sps = st.seconds > 0 ? double(st.samples) / st.seconds : 0;
     const double rps = st.seconds > 0 ? double(st.rays) / st.seconds : 0;
@@ -395,6 +475,9 @@ int run_render(const RenderArgs& args) {
         j["width"] = width;
         j["height"] = height;
         j["spp"] = film.spp;
+        j["resumed_spp"] = resumed ? resumed->film.spp : 0;
+        j["interrupted"] = interrupted_by != 0;
+        if (!checkpoint_path.empty()) j["checkpoint"] = checkpoint_path;
         j["max_depth"] = options.max_depth;
         j["seed"] = options.seed;
         j["seconds"] = st.seconds;
@@ -417,7 +500,7 @@ int run_render(const RenderArgs& args) {
         j["bvh_build_seconds"] = ds.bvh_build_seconds;
         j["first_pass_seconds"] = first_pass_seconds;
         j["texture_bytes"] = texture_bytes;
-        write_text_atomically(args.stats, j.dump(2) + "\n");
+        write_file_atomically(args.stats, j.dump(2) + "\n");
     }
     if (args.profile) {
         const RenderProfile& p = st.profile;
@@ -440,11 +523,18 @@ int run_render(const RenderArgs& args) {
                          "predicted MSE %.3g at %.0f spp; efficiency %.3g%s\n",
                          c.name.c_str(), c.variance_transport, c.variance_pixel, c.seconds_per_pass, c.predicted_mse,
                          c.predicted_spp, c.efficiency, &c == &pilot.choice() ? "  <- chosen" : "");
-    std::fprintf(stderr,
-                 "clbdpt: %s %d spp %dx%d in %.2f s: %.3f M samples/s, %.2f M rays/s; kernel %s %.2f s; wrote %s\n",
-                 strategy_mix.c_str(), film.spp, width, height, st.seconds, sps * 1e-6, rps * 1e-6,
-                 st.program_from_cache ? "cached" : "build", st.build_seconds, output.c_str());
-    if (!mix_note.empty()) std::fprintf(stderr, "clbdpt: strategy mix %s\n", mix_note.c_str());
+    if (interrupted_by != 0) {
+        // One line: what was saved. (A non-finite sample, if any, is still reported below.)
+        const std::string of_planned = options.time_budget > 0 ? "" : " of " + std::to_string(options.spp);
+        std::fprintf(stderr, "clbdpt: interrupted: wrote %s with %d spp%s%s%s\n", output.c_str(), film.spp,
+                     of_planned.c_str(), checkpoint_path.empty() ? "" : "; checkpoint ", checkpoint_path.c_str());
+    } else {
+        std::fprintf(stderr,
+                     "clbdpt: %s %d spp %dx%d in %.2f s: %.3f M samples/s, %.2f M rays/s; kernel %s %.2f s; wrote %s\n",
+                     strategy_mix.c_str(), film.spp, width, height, st.seconds, sps * 1e-6, rps * 1e-6,
+                     st.program_from_cache ? "cached" : "build", st.build_seconds, output.c_str());
+        if (!mix_note.empty()) std::fprintf(stderr, "clbdpt: strategy mix %s\n", mix_note.c_str());
+    }
     if (st.dropped_samples > 0) {
         std::string first;
         for (const DroppedSample& d : st.first_dropped) {
@@ -458,9 +548,9 @@ int run_render(const RenderArgs& args) {
                      "please report it with the scene; first: %s)\n",
                      static_cast<unsigned long long>(st.dropped_samples), static_cast<unsigned long long>(st.samples),
                      output.c_str(), first.c_str());
-        return 1;
     }
-    return 0;
+    if (interrupted_by != 0) return 128 + interrupted_by;
+    return st.dropped_samples > 0 ? 1 : 0;
 }
 
 }  // namespace
@@ -526,6 +616,15 @@ int main(int argc, char** argv) {
         ->check(CLI::Range(0.001f, 179.0f));
     render->add_flag("--no-default-light", args.no_default_light,
                      "Do not light a scene without lights by a uniform white environment");
+    render->add_option("--checkpoint", args.checkpoint,
+                       "Save the render's progress to FILE now and then (--checkpoint-every), at the end and on "
+                       "Ctrl-C, atomically; --resume FILE goes on from it");
+    render->add_option("--checkpoint-every", args.checkpoint_every, "Seconds between checkpoints (default 60)")
+        ->check(CLI::PositiveNumber);
+    render->add_option("--resume", args.resume,
+                       "Go on from a checkpoint of the same scene and settings up to --spp (or for --time more "
+                       "seconds); the image equals an uninterrupted render's bit for bit on the same device. Goes "
+                       "on checkpointing into FILE unless --checkpoint names another");
     render->add_flag("-v,--verbose", args.verbose, "Print device, BVH and kernel flags");
     // Tests only (no group: not in --help): that pixel's sample 0 gets a NaN contribution.
     render->add_option("--debug-nan-pixel", args.debug_nan_pixel)->group("");

@@ -34,6 +34,7 @@ namespace {
 
 // ---- Small helpers -----------------------------------------------------------------------------
 
+
 std::string env_or_empty(const char* name) {
     const char* value = std::getenv(name);
     return value ? std::string(value) : std::string();
@@ -50,6 +51,27 @@ std::string trimmed(std::string s) {
     size_t first = 0;
     while (first < s.size() && std::isspace(static_cast<unsigned char>(s[first]))) ++first;
     return s.substr(first);
+}
+
+// A failed build as one line: the first diagnostic of the compiler's log that says "error"
+// (else its first line), with the whole log saved to a file the line names.
+Error build_failure(const std::string& entry_file, const std::string& device_name, const std::string& raw_log) {
+    const std::string log = trimmed(raw_log);
+    std::string first, line;
+    std::istringstream lines(log);
+    while (std::getline(lines, line)) {
+        if (first.empty() && !line.empty()) first = line;
+        if (line.find("error") != std::string::npos) {
+            first = line;
+            break;
+        }
+    }
+    std::string saved;
+    const std::string log_path =
+        (fs::temp_directory_path() / ("clbdpt-build-" + std::to_string(static_cast<long>(::getpid())) + ".log")).string();
+    if (std::ofstream(log_path) << log << "\n") saved = " (whole log: " + log_path + ")";
+    return Error("kernel build failed for " + entry_file + " on " + device_name + ": " +
+                 (first.empty() ? "no log from the compiler" : first) + saved);
 }
 
 // "OpenCL: clCreateContext: CL_OUT_OF_HOST_MEMORY"
@@ -470,8 +492,7 @@ const ProgramBuild& DeviceContext::program(const std::string& entry_file, const 
             try {
                 program.build(devices, options.c_str());
             } catch (const cl::BuildError&) {
-                std::string log = program.getBuildInfo<CL_PROGRAM_BUILD_LOG>(entry_.device);
-                throw Error("kernel build failed for " + entry_file + " on " + entry_.name + ":\n" + trimmed(log));
+                throw build_failure(entry_file, entry_.name, program.getBuildInfo<CL_PROGRAM_BUILD_LOG>(entry_.device));
             }
             build.program = program;
             build.build_log = trimmed(program.getBuildInfo<CL_PROGRAM_BUILD_LOG>(entry_.device));

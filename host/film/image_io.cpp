@@ -18,6 +18,7 @@
 #include <OpenImageIO/imageio.h>
 #include <OpenImageIO/strutil.h>
 
+#include "util/atomic_file.h"
 #include "util/error.h"
 
 namespace clbdpt {
@@ -53,22 +54,6 @@ std::vector<uint8_t> to_srgb8(const std::vector<float>& rgb) {
     }
     return out;
 }
-
-// Removes the temporary file unless release() was called (after the rename).
-class TempFile {
-public:
-    explicit TempFile(std::string path) : path_(std::move(path)) {}
-    ~TempFile() {
-        if (!path_.empty()) std::remove(path_.c_str());
-    }
-    TempFile(const TempFile&) = delete;
-    TempFile& operator=(const TempFile&) = delete;
-    const std::string& path() const { return path_; }
-    void release() { path_.clear(); }
-
-private:
-    std::string path_;
-};
 
 }  // namespace
 
@@ -110,8 +95,7 @@ void write_image(const std::string& path, int width, int height, const std::vect
     if (ext == ".jpg" || ext == ".jpeg") spec.attribute("CompressionQuality", 95);
     for (const auto& [key, value] : metadata.strings) spec.attribute(key, value);
 
-    const std::string temp_name = path + ".tmp-" + std::to_string(static_cast<long>(::getpid()));
-    TempFile temp(temp_name);
+    TemporaryFile temp(path);
     auto fail = [&](const std::string& why) {
         throw Error("cannot write '" + path + "': " + first_line(why, "OpenImageIO error"));
     };
@@ -130,8 +114,7 @@ void write_image(const std::string& path, int width, int height, const std::vect
     }
     if (!out->close()) fail(out->geterror());
     out.reset();
-    if (std::rename(temp.path().c_str(), path.c_str()) != 0) fail(std::strerror(errno));
-    temp.release();
+    temp.commit();
 }
 
 namespace {

@@ -18,69 +18,155 @@ double seconds_since(Clock::time_point start) { return std::chrono::duration<dou
 // How often the progress callback runs while passes are in flight.
 constexpr auto kProgressInterval = std::chrono::milliseconds(200);
 
+// Hands out pass numbers to the device threads and lets the coordinating thread hold them
+// between passes (for a snapshot of the films) or stop them.
+class PassQueue {
+public:
+    PassQueue(int first, int end, bool timed, double budget, Clock::time_point start)
+        : next_(first), first_(first), end_(end), timed_(timed), budget_(budget), start_(start) {}
+
+    // The next pass to render, or -1 when the render is over. Waits while the queue is held.
+    int take() {
+        std::unique_lock<std::mutex> lock(mutex_);
+        changed_.wait(lock, [&] { return !held_ || stopped_; });
+        if (stopped_) return -1;
+        // A time-bound render has at least one pass, however small the budget.
+        if (timed_ ? next_ > first_ && seconds_since(start_) >= budget_ : next_ >= end_) return -1;
+        ++in_flight_;
+        return next_++;
+    }
+    void done() {
+        std::lock_guard<std::mutex> lock(mutex_);
+        --in_flight_;
+        ++passes_done_;
+        changed_.notify_all();
+    }
+    // Holds the queue and waits until no pass is in flight: the films hold passes [first, next).
+    void hold() {
+        std::unique_lock<std::mutex> lock(mutex_);
+        held_ = true;
+        changed_.wait(lock, [&] { return in_flight_ == 0; });
+    }
+    void release() {
+        std::lock_guard<std::mutex> lock(mutex_);
+        held_ = false;
+        changed_.notify_all();
+    }
+    void stop() {
+        std::lock_guard<std::mutex> lock(mutex_);
+        stopped_ = true;
+        changed_.notify_all();
+    }
+    // Waits until the threads are finished (all passes taken and done) or `period` has passed.
+    // Returns true when finished.
+    template <typename Duration>
+    bool wait_finished(Duration period, const int& threads_running) {
+        std::unique_lock<std::mutex> lock(mutex_);
+        return changed_.wait_for(lock, period, [&] { return threads_running == 0; });
+    }
+    void thread_exited(int* threads_running) {
+        std::lock_guard<std::mutex> lock(mutex_);
+        --*threads_running;
+        changed_.notify_all();
+    }
+    int passes_done() {
+        std::lock_guard<std::mutex> lock(mutex_);
+        return passes_done_;
+    }
+
+private:
+    std::mutex mutex_;
+    std::condition_variable changed_;
+    int next_, first_, end_;
+    bool timed_;
+    double budget_;
+    Clock::time_point start_;
+    int in_flight_ = 0;
+    int passes_done_ = 0;
+    bool held_ = false;
+    bool stopped_ = false;
+};
+
+// The films of all devices as one, in device order (the order every merge uses).
+Film merge(const std::vector<Film>& films) {
+    Film film(films.front().width, films.front().height);
+    for (const Film& f : films) film.add(f);
+    return film;
+}
+
 }  // namespace
 
-Film render_image(const std::vector<Renderer*>& renderers, const RenderOptions& options, RenderStats* stats) {
+Film render_image(const std::vector<Renderer*>& renderers, const RenderOptions& options, RenderStats* stats,
+                  const RenderSchedule& schedule) {
     const Camera& camera = renderers.front()->scene().camera;
     const bool timed = options.time_budget > 0;
+    const int first_pass = schedule.resume ? schedule.resume->spp : 0;
     const int planned = timed ? 0 : options.spp;
-    std::atomic<int> next_pass{0}, passes_done{0};
+    std::vector<Film> films(renderers.size(), Film(camera.width, camera.height));
+    if (schedule.resume) films.front() = *schedule.resume;
+    const auto start = Clock::now();
+    PassQueue queue(first_pass, options.spp, timed, options.time_budget, start);
     std::exception_ptr failure;
     std::mutex failure_mutex;
-    std::atomic<bool> stop{false};
-    std::vector<Film> films(renderers.size(), Film(camera.width, camera.height));
-    const auto start = Clock::now();
     std::atomic<double> first_pass_seconds{0.0};
+    int threads_running = int(renderers.size());
 
     auto worker = [&](size_t d) {
         try {
-            for (;;) {
-                if (stop) return;
-                // A time-bound render has at least one pass, however small the budget.
-                int pass = next_pass++;
-                if (timed && pass > 0 && seconds_since(start) >= options.time_budget) return;
-                if (!timed && pass >= options.spp) return;
+            for (int pass; (pass = queue.take()) >= 0;) {
                 renderers[d]->render_passes(films[d], uint32_t(pass), 1);
-                if (passes_done++ == 0) first_pass_seconds = seconds_since(start);
+                if (queue.passes_done() == 0) first_pass_seconds = seconds_since(start);
+                queue.done();
             }
         } catch (...) {
             std::lock_guard<std::mutex> lock(failure_mutex);
             if (!failure) failure = std::current_exception();
-            stop = true;
+            queue.stop();
         }
+        queue.thread_exited(&threads_running);
     };
+    if (schedule.stop_requested && schedule.stop_requested()) queue.stop();
     std::vector<std::thread> threads;
     for (size_t d = 0; d < renderers.size(); ++d) threads.emplace_back(worker, d);
-    // The progress reporter waits on a condition variable, so the end of the render wakes it at
-    // once (a plain sleep would add up to one interval to every render's time).
-    std::mutex reporter_mutex;
-    std::condition_variable reporter_wake;
-    bool finished = false;
-    std::thread reporter;
-    if (options.progress) {
-        reporter = std::thread([&] {
-            std::unique_lock<std::mutex> lock(reporter_mutex);
-            while (!reporter_wake.wait_for(lock, kProgressInterval, [&] { return finished; }))
-                options.progress(passes_done, planned, seconds_since(start));
-        });
+
+    // This thread reports progress, watches for a stop request and takes the snapshots.
+    auto last_checkpoint = Clock::now();
+    int checkpointed_spp = first_pass;
+    for (;;) {
+        if (queue.wait_finished(kProgressInterval, threads_running)) break;
+        if (schedule.stop_requested && schedule.stop_requested()) queue.stop();
+        if (options.progress) options.progress(first_pass + queue.passes_done(), planned, seconds_since(start));
+        if (schedule.checkpoint && schedule.checkpoint_seconds > 0 &&
+            seconds_since(last_checkpoint) >= schedule.checkpoint_seconds) {
+            queue.hold();
+            Film snapshot = merge(films);
+            queue.release();
+            // Written while the devices go on; a snapshot with no new pass is not written again.
+            if (snapshot.spp > checkpointed_spp) {
+                try {
+                    schedule.checkpoint(snapshot);
+                } catch (...) {
+                    // Rethrown once the device threads are joined.
+                    std::lock_guard<std::mutex> lock(failure_mutex);
+                    if (!failure) failure = std::current_exception();
+                    queue.stop();
+                }
+                checkpointed_spp = snapshot.spp;
+            }
+            last_checkpoint = Clock::now();
+        }
     }
     for (std::thread& t : threads) t.join();
     const double seconds = seconds_since(start);
-    {
-        std::lock_guard<std::mutex> lock(reporter_mutex);
-        finished = true;
-    }
-    reporter_wake.notify_all();
-    if (reporter.joinable()) reporter.join();
     if (failure) std::rethrow_exception(failure);
-    if (options.progress) options.progress(passes_done, planned, seconds);
+    const int passes_done = queue.passes_done();
+    if (options.progress) options.progress(first_pass + passes_done, planned, seconds);
 
-    Film film(camera.width, camera.height);
+    Film film = merge(films);
     RenderStats total;
     total.defines = renderers.front()->stats().defines;
     total.program_from_cache = true;
     for (size_t d = 0; d < renderers.size(); ++d) {
-        film.add(films[d]);
         total.add(renderers[d]->stats());
         total.program_from_cache = total.program_from_cache && renderers[d]->stats().program_from_cache;
     }
