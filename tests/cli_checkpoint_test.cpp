@@ -222,4 +222,41 @@ TEST_F(CheckpointTest, FullDiskKeepsTheOlderFiles) {
     expect_no_temporary_files();
 }
 
+// Several devices and time budgets checkpoint too: two PoCL devices resume what they
+// checkpointed and end within float rounding of one device's uninterrupted render (devices
+// merge in a different order); a --time render resumes for --time more seconds.
+TEST_F(CheckpointTest, TwoDevicesAndTimeBudgetsResume) {
+    const std::string render = "render " + kScene + " --integrator bdpt --width 24 --height 24";
+    const std::string two_devices = "POCL_DEVICES='pthread pthread' POCL_MAX_PTHREAD_COUNT=1 ";
+    CommandResult first = run(render + " --device all --spp 4 -o " + out("a.exr") + " --checkpoint " + out("a.ck"),
+                              two_devices);
+    ASSERT_EQ(first.status, 0) << first.output;
+    CommandResult resumed = run(render + " --device all --spp 9 -o " + out("b.exr") + " --resume " + out("a.ck") +
+                                    " --stats " + out("b.json"),
+                                two_devices);
+    ASSERT_EQ(resumed.status, 0) << resumed.output;
+    std::ifstream stats_file(out("b.json"));
+    const nlohmann::json stats = nlohmann::json::parse(stats_file);
+    EXPECT_EQ(stats["devices"], 2);
+    EXPECT_EQ(stats["resumed_spp"], 4);
+    CommandResult whole = run(render + " --spp 9 -o " + out("c.exr"));
+    ASSERT_EQ(whole.status, 0) << whole.output;
+    const std::vector<float> b = read_exr(out("b.exr")), c = read_exr(out("c.exr"));
+    ASSERT_EQ(b.size(), c.size());
+    for (size_t i = 0; i < b.size(); ++i) EXPECT_NEAR(b[i], c[i], 1e-6f * (1.0f + c[i])) << i;
+
+    const std::string timed = "render " + kScene + " --integrator pt --width 16 --height 16 --time 0.3 -o " +
+                              out("t.png") + " --stats " + out("t.json");
+    CommandResult t1 = run(timed + " --checkpoint " + out("t.ck"));
+    ASSERT_EQ(t1.status, 0) << t1.output;
+    const int spp1 = clbdpt::read_checkpoint(out("t.ck")).film.spp;
+    CommandResult t2 = run(timed + " --resume " + out("t.ck"));
+    ASSERT_EQ(t2.status, 0) << t2.output;
+    std::ifstream timed_file(out("t.json"));
+    const nlohmann::json timed_stats = nlohmann::json::parse(timed_file);
+    EXPECT_EQ(timed_stats["resumed_spp"], spp1);
+    EXPECT_GT(timed_stats["spp"].get<int>(), spp1);
+    EXPECT_EQ(clbdpt::read_checkpoint(out("t.ck")).film.spp, timed_stats["spp"].get<int>());
+}
+
 }  // namespace
