@@ -270,7 +270,8 @@ void Renderer::limit_launch_size(double seconds, int item_count) {
     // launch size (the host adds items in pixel order whatever the batches).
     if (seconds <= kMaxLaunchSeconds || item_count < launch_items_) return;
     const int granule = std::max(local_size_, 1);
-    const int shorter = int(double(launch_items_) * kMaxLaunchSeconds / seconds) / granule * granule;
+    // Aim at half the limit, so that launches near it do not shrink again and again.
+    const int shorter = int(double(launch_items_) * 0.5 * kMaxLaunchSeconds / seconds) / granule * granule;
     launch_items_ = std::max(shorter, std::min(launch_items_, kMinLaunchGroups * granule));
 }
 
