@@ -7,7 +7,6 @@
 #include <chrono>
 #include <filesystem>
 #include <cstdio>
-#include <fstream>
 #include <memory>
 #include <iostream>
 #include <nlohmann/json.hpp>
@@ -21,9 +20,9 @@
 #include "render/automatic_view.h"
 #include "render/device_scene.h"
 #include "render/features.h"
-#include "render/scene_fingerprint.h"
 #include "render/render_loop.h"
 #include "render/renderer.h"
+#include "render/scene_fingerprint.h"
 #include "render/strategy_pilot.h"
 #include "scene/scene.h"
 #include "util/atomic_file.h"
