@@ -41,11 +41,14 @@ public:
         ++passes_done_;
         changed_.notify_all();
     }
-    // Holds the queue and waits until no pass is in flight: the films hold passes [first, next).
-    void hold() {
+    // Holds the queue and waits until no pass is in flight; then the films hold passes
+    // [first, next). Returns false instead if the render stops (an interrupt, or a device's
+    // failure, whose pass never ends).
+    bool hold() {
         std::unique_lock<std::mutex> lock(mutex_);
         held_ = true;
-        changed_.wait(lock, [&] { return in_flight_ == 0; });
+        changed_.wait(lock, [&] { return in_flight_ == 0 || stopped_; });
+        return !stopped_;
     }
     void release() {
         std::lock_guard<std::mutex> lock(mutex_);
@@ -138,8 +141,8 @@ Film render_image(const std::vector<Renderer*>& renderers, const RenderOptions& 
         if (options.progress) options.progress(first_pass + queue.passes_done(), planned, seconds_since(start));
         if (schedule.checkpoint && schedule.checkpoint_seconds > 0 &&
             seconds_since(last_checkpoint) >= schedule.checkpoint_seconds) {
-            queue.hold();
-            Film snapshot = merge(films);
+            Film snapshot;
+            if (queue.hold()) snapshot = merge(films);
             queue.release();
             // Written while the devices go on; a snapshot with no new pass is not written again.
             if (snapshot.spp > checkpointed_spp) {
