@@ -7,6 +7,7 @@
 
 #include "util/atomic_file.h"
 #include "util/error.h"
+#include "util/fnv1a.h"
 
 namespace clbdpt {
 
@@ -35,14 +36,6 @@ struct Header {
 };
 static_assert(sizeof(Header) == 64, "the checkpoint header is written as it lies in memory");
 
-uint64_t fnv1a(const char* data, size_t size, uint64_t hash = 14695981039346656037ull) {
-    for (size_t i = 0; i < size; ++i) {
-        hash ^= uint8_t(data[i]);
-        hash *= 1099511628211ull;
-    }
-    return hash;
-}
-
 void append(std::string* out, const void* data, size_t bytes) { out->append(static_cast<const char*>(data), bytes); }
 
 }  // namespace
@@ -68,7 +61,9 @@ void write_checkpoint(const std::string& path, const CheckpointInfo& info, const
     append(&bytes, film.camera_sum.data(), sizeof(double) * film.camera_sum.size());
     append(&bytes, film.light_sum.data(), sizeof(double) * film.light_sum.size());
     append(&bytes, film.strategy_sum.data(), sizeof(double) * film.strategy_sum.size());
-    const uint64_t hash = fnv1a(bytes.data(), bytes.size());
+    Fnv1a hash_of_contents;
+    hash_of_contents.bytes(bytes.data(), bytes.size());
+    const uint64_t hash = hash_of_contents.value();
     append(&bytes, &hash, sizeof hash);
     write_file_atomically(path, bytes, /*durable=*/true);
 }
@@ -100,7 +95,9 @@ Checkpoint read_checkpoint(const std::string& path) {
                       std::to_string(expected) + ")");
     uint64_t stored_hash;
     std::memcpy(&stored_hash, bytes.data() + bytes.size() - 8, 8);
-    if (fnv1a(bytes.data(), bytes.size() - 8) != stored_hash) throw damaged("its contents are damaged (hash mismatch)");
+    Fnv1a hash_of_contents;
+    hash_of_contents.bytes(bytes.data(), bytes.size() - 8);
+    if (hash_of_contents.value() != stored_hash) throw damaged("its contents are damaged (hash mismatch)");
 
     Checkpoint c;
     c.info.scene_fingerprint = h.scene_fingerprint;
