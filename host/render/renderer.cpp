@@ -184,7 +184,7 @@ bool Renderer::sample_is_finite(int item) const {
     // (cl/kernels/render.cl); a sum that overflowed is caught here as well.
     const cl_float4& c = camera_host_[size_t(item)];
     if (!(c.s[3] >= 0 && std::isfinite(c.s[0]) && std::isfinite(c.s[1]) && std::isfinite(c.s[2]))) return false;
-    const SplatRecord* splats = &splats_host_[size_t(item) * splat_slots_];
+    const SplatRecord* splats = splats_host_.data() + size_t(item) * splat_slots_;
     for (int k = 0; k < splat_slots_; ++k)
         if (splats[k].pixel >= 0 &&
             !(std::isfinite(splats[k].r) && std::isfinite(splats[k].g) && std::isfinite(splats[k].b)))
@@ -227,7 +227,7 @@ void Renderer::accumulate(Film& film, const PassSpec& pass, int first_item, int 
         dst[1] += c.s[1];
         dst[2] += c.s[2];
         stats_.rays += uint64_t(c.s[3]);
-        const SplatRecord* splats = &splats_host_[size_t(i) * splat_slots_];
+        const SplatRecord* splats = splats_host_.data() + size_t(i) * splat_slots_;
         for (int k = 0; k < splat_slots_; ++k) {
             const SplatRecord& r = splats[k];
             if (r.pixel < 0) continue;
