@@ -249,6 +249,43 @@ TEST_F(CliTest, TwoDevicesShareOneRender) {
 // The default integrator (auto) runs the efficiency pilot when the render is long enough for it
 // to pay off, reports what it measured and renders with the candidate it predicts best; short
 // renders use plain bdpt; --light-subpaths / --connections fix the mix by hand.
+// A device whose launches fail mid-render (injected: device K fails after N launches, here in
+// the middle of a pass of 9 launches) leaves the render with one warning; its film is restored
+// to before that pass, the pass goes to the other device, and the image equals one device's
+// render within float rounding. The last device failing fails the render, writing nothing.
+TEST_F(CliTest, FailingDeviceLosesNothing) {
+    const std::string render = "render " + std::string(CLBDPT_SCENES_DIR) +
+                               "/cornell-box/cornell-box.json --integrator bdpt --spp 6 --width 24 --height 24 "
+                               "--batch-items 64";
+    const std::string two_devices = "POCL_DEVICES='pthread pthread' POCL_MAX_PTHREAD_COUNT=1 ";
+    CommandResult one = run(render + " -o " + out("one.exr"));
+    ASSERT_EQ(one.status, 0) << one.output;
+    int w = 0, h = 0;
+    const std::vector<float> reference = clbdpt::read_image_rgb(out("one.exr"), &w, &h);
+    for (const char* failing : {"1:5", "0:14"}) {
+        CommandResult r = run(render + " --device all --debug-fail-device " + failing + " -o " + out("two.exr") +
+                                  " --stats " + out("two.json"),
+                              two_devices);
+        ASSERT_EQ(r.status, 0) << failing << ": " << r.output;
+        EXPECT_NE(r.output.find("clbdpt: warning: device "), std::string::npos) << r.output;
+        EXPECT_NE(r.output.find("injected by --debug-fail-device"), std::string::npos) << r.output;
+        std::ifstream in(out("two.json"));
+        const nlohmann::json j = nlohmann::json::parse(in);
+        EXPECT_EQ(j["spp"], 6);
+        EXPECT_EQ(j["dropped_devices"].size(), 1u);
+        const std::vector<float> image = clbdpt::read_image_rgb(out("two.exr"), &w, &h);
+        ASSERT_EQ(image.size(), reference.size());
+        for (size_t i = 0; i < image.size(); ++i) ASSERT_NEAR(image[i], reference[i], 1e-6f * (1.0f + reference[i])) << i;
+    }
+    fs::remove(out("one.exr"));
+    fs::remove(out("two.exr"));
+    fs::remove(out("two.json"));
+    CommandResult alone = run(render + " --debug-fail-device 0:3 -o " + out("alone.exr"));
+    EXPECT_EQ(alone.status, 1) << alone.output;
+    EXPECT_NE(alone.output.find("clbdpt: error: OpenCL: launch failed (injected"), std::string::npos) << alone.output;
+    EXPECT_TRUE(dir_is_empty());
+}
+
 TEST_F(CliTest, AutoChoosesTheStrategyMixByPilot) {
     const std::string scene = " " + std::string(CLBDPT_SCENES_DIR) + "/lamp-ceiling/lamp-ceiling.json --width 32 --height 32";
     CommandResult r = run("render" + scene + " --spp 160 -o " + out("auto.exr") + " --stats " + out("auto.json"));

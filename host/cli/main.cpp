@@ -59,6 +59,8 @@ struct RenderArgs {
     float fov = 0;
     bool no_default_light = false;
     int debug_nan_pixel = -1;  // hidden: tests of the dropped-sample path
+    std::string debug_fail_device;  // hidden: "K:N", device K's launches fail after N
+    int batch_items = 0;            // hidden: work items per launch at most
     std::string checkpoint;         // --checkpoint FILE
     double checkpoint_every = 60;   // seconds
     std::string resume;             // --resume FILE
@@ -296,6 +298,7 @@ int run_render(const RenderArgs& args) {
     options.debug_nan_pixel = args.debug_nan_pixel;
     options.all_features = args.all_features;
     options.local_size = args.local_size;
+    options.batch_items = args.batch_items;
     if (!args.strategy_images.empty())
         options.strategy_images = args.unweighted ? RenderOptions::StrategyImages::Unweighted
                                                   : RenderOptions::StrategyImages::Weighted;
@@ -377,9 +380,14 @@ int run_render(const RenderArgs& args) {
         : automatic && !mix_by_hand ? choose_strategy_mix(device, ds, &options, &pilot, &pilot_stats, &renderers)
                                     : "";
     const bool run_pilot = pilot.seconds > 0;
+    int failing_device = -1, fail_after = -1;
+    if (!args.debug_fail_device.empty() &&
+        std::sscanf(args.debug_fail_device.c_str(), "%d:%d", &failing_device, &fail_after) != 2)
+        throw Error("--debug-fail-device takes K:N");
     for (size_t i = renderers.size(); i < devices.size(); ++i) {
-        auto& d = devices[i];
-        renderers.push_back(std::make_unique<Renderer>(*d, ds, options));
+        RenderOptions device_options = options;
+        if (int(i) == failing_device) device_options.debug_fail_after_launches = fail_after;
+        renderers.push_back(std::make_unique<Renderer>(*devices[i], ds, device_options));
     }
     for (size_t i = 0; i < devices.size(); ++i) {
         auto& d = devices[i];
@@ -410,6 +418,10 @@ int run_render(const RenderArgs& args) {
             }
         };
     }
+    schedule.device_dropped = [](const std::string& what) {
+        std::fprintf(stderr, "\nclbdpt: warning: device %s; it left the render and its pass went to the others\n",
+                     what.c_str());
+    };
     RenderStats st;
     const double seconds_before_passes = seconds_since(start) - pilot.seconds;
     Film film = render_image(renderer_list, options, &st, schedule);
@@ -493,6 +505,7 @@ int run_render(const RenderArgs& args) {
         j["kernel_defines"] = st.defines;
         j["device"] = device_names;
         j["devices"] = entries.size();
+        j["dropped_devices"] = st.dropped_devices;
         j["triangles"] = ds.triangles.size();
         j["load_seconds"] = load_seconds;
         j["device_scene_seconds"] = device_scene_seconds;
@@ -627,6 +640,9 @@ int main(int argc, char** argv) {
     render->add_flag("-v,--verbose", args.verbose, "Print device, BVH and kernel flags");
     // Tests only (no group: not in --help): that pixel's sample 0 gets a NaN contribution.
     render->add_option("--debug-nan-pixel", args.debug_nan_pixel)->group("");
+    // Tests only: device K's launches fail after N launches; work items per launch at most.
+    render->add_option("--debug-fail-device", args.debug_fail_device)->group("");
+    render->add_option("--batch-items", args.batch_items)->group("")->check(CLI::PositiveNumber);
 
     try {
         app.parse(argc, argv);

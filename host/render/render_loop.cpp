@@ -5,6 +5,7 @@
 #include <condition_variable>
 #include <exception>
 #include <mutex>
+#include <string>
 #include <thread>
 
 namespace clbdpt {
@@ -19,21 +20,38 @@ double seconds_since(Clock::time_point start) { return std::chrono::duration<dou
 constexpr auto kProgressInterval = std::chrono::milliseconds(200);
 
 // Hands out pass numbers to the device threads and lets the coordinating thread hold them
-// between passes (for a snapshot of the films) or stop them.
+// between passes (for a snapshot of the films) or stop them. A pass that a failed device gave
+// back is handed out first, even to a held or stopped queue: every film the render hands out
+// must hold passes first .. next - 1 with none missing.
 class PassQueue {
 public:
-    PassQueue(int first, int end, bool timed, double budget, Clock::time_point start)
-        : next_(first), first_(first), end_(end), timed_(timed), budget_(budget), start_(start) {}
+    PassQueue(int first, int end, bool timed, double budget, Clock::time_point start, int devices)
+        : next_(first), first_(first), end_(end), timed_(timed), budget_(budget), start_(start), devices_(devices) {}
 
-    // The next pass to render, or -1 when the render is over. Waits while the queue is held.
+    // The next pass to render, or -1 when the render is over for this device. Waits while the
+    // queue is held, and at the end until no pass is in flight: a failing device may yet give
+    // one back.
     int take() {
         std::unique_lock<std::mutex> lock(mutex_);
-        changed_.wait(lock, [&] { return !held_ || stopped_; });
-        if (stopped_) return -1;
-        // A time-bound render has at least one pass, however small the budget.
-        if (timed_ ? next_ > first_ && seconds_since(start_) >= budget_ : next_ >= end_) return -1;
-        ++in_flight_;
-        return next_++;
+        for (;;) {
+            if (aborted_) return leave();
+            if (!given_back_.empty()) {
+                const int pass = given_back_.back();
+                given_back_.pop_back();
+                ++in_flight_;
+                return pass;
+            }
+            // A time-bound render has at least one pass, however small the budget.
+            const bool no_new_pass =
+                stopped_ || (timed_ ? next_ > first_ && seconds_since(start_) >= budget_ : next_ >= end_);
+            if (no_new_pass) {
+                if (in_flight_ == 0) return leave();
+            } else if (!held_) {
+                ++in_flight_;
+                return next_++;
+            }
+            changed_.wait(lock);
+        }
     }
     void done() {
         std::lock_guard<std::mutex> lock(mutex_);
@@ -41,23 +59,40 @@ public:
         ++passes_done_;
         changed_.notify_all();
     }
-    // Holds the queue and waits until no pass is in flight; then the films hold passes
-    // [first, next). Returns false instead if the render stops (an interrupt, or a device's
-    // failure, whose pass never ends).
+    // A device failed during `pass`: true (the pass goes to the other devices, the caller's
+    // device leaves the render) unless it was the last one.
+    bool give_back(int pass) {
+        std::lock_guard<std::mutex> lock(mutex_);
+        if (devices_ <= 1) return false;
+        --devices_;
+        --in_flight_;
+        given_back_.push_back(pass);
+        changed_.notify_all();
+        return true;
+    }
+    // Holds the queue and waits until no pass is in flight or given back; then the films hold
+    // passes [first, next). Returns false instead if the render stops.
     bool hold() {
         std::unique_lock<std::mutex> lock(mutex_);
         held_ = true;
-        changed_.wait(lock, [&] { return in_flight_ == 0 || stopped_; });
-        return !stopped_;
+        changed_.wait(lock, [&] { return (in_flight_ == 0 && given_back_.empty()) || stopped_ || aborted_; });
+        return !stopped_ && !aborted_;
     }
     void release() {
         std::lock_guard<std::mutex> lock(mutex_);
         held_ = false;
         changed_.notify_all();
     }
+    // No new pass starts (an interrupt); passes given back are still rendered.
     void stop() {
         std::lock_guard<std::mutex> lock(mutex_);
         stopped_ = true;
+        changed_.notify_all();
+    }
+    // The render has failed: nothing more starts.
+    void abort() {
+        std::lock_guard<std::mutex> lock(mutex_);
+        aborted_ = true;
         changed_.notify_all();
     }
     // Waits until the threads are finished (all passes taken and done) or `period` has passed.
@@ -86,8 +121,17 @@ private:
     Clock::time_point start_;
     int in_flight_ = 0;
     int passes_done_ = 0;
+    int devices_;  // devices that have not left the render
+
+    int leave() {
+        --devices_;
+        changed_.notify_all();
+        return -1;
+    }
+    std::vector<int> given_back_;
     bool held_ = false;
     bool stopped_ = false;
+    bool aborted_ = false;
 };
 
 // The films of all devices as one, in device order (the order every merge uses).
@@ -108,23 +152,38 @@ Film render_image(const std::vector<Renderer*>& renderers, const RenderOptions& 
     std::vector<Film> films(renderers.size(), Film(camera.width, camera.height));
     if (schedule.resume) films.front() = *schedule.resume;
     const auto start = Clock::now();
-    PassQueue queue(first_pass, options.spp, timed, options.time_budget, start);
+    PassQueue queue(first_pass, options.spp, timed, options.time_budget, start, int(renderers.size()));
     std::exception_ptr failure;
     std::mutex failure_mutex;
     std::atomic<double> first_pass_seconds{0.0};
     int threads_running = int(renderers.size());
 
+    std::vector<std::string> dropped_devices;
+    // With other devices to take over, a device's film is kept as it was before each pass: a
+    // pass that fails half-way leaves part of its samples in the film, which are taken out
+    // again by restoring the copy (exactly, unlike subtracting them).
+    const bool can_fail_over = renderers.size() > 1;
     auto worker = [&](size_t d) {
-        try {
-            for (int pass; (pass = queue.take()) >= 0;) {
+        Film before_pass;
+        for (int pass; (pass = queue.take()) >= 0;) {
+            if (can_fail_over) before_pass = films[d];
+            try {
                 renderers[d]->render_passes(films[d], uint32_t(pass), 1);
-                if (queue.passes_done() == 0) first_pass_seconds = seconds_since(start);
-                queue.done();
+            } catch (const std::exception& e) {
+                if (can_fail_over && queue.give_back(pass)) {
+                    films[d] = std::move(before_pass);
+                    std::lock_guard<std::mutex> lock(failure_mutex);
+                    dropped_devices.push_back(renderers[d]->device().entry().name + ": " + e.what());
+                    if (schedule.device_dropped) schedule.device_dropped(dropped_devices.back());
+                    break;
+                }
+                std::lock_guard<std::mutex> lock(failure_mutex);
+                if (!failure) failure = std::current_exception();
+                queue.abort();
+                break;
             }
-        } catch (...) {
-            std::lock_guard<std::mutex> lock(failure_mutex);
-            if (!failure) failure = std::current_exception();
-            queue.stop();
+            if (queue.passes_done() == 0) first_pass_seconds = seconds_since(start);
+            queue.done();
         }
         queue.thread_exited(&threads_running);
     };
@@ -152,7 +211,7 @@ Film render_image(const std::vector<Renderer*>& renderers, const RenderOptions& 
                     // Rethrown once the device threads are joined.
                     std::lock_guard<std::mutex> lock(failure_mutex);
                     if (!failure) failure = std::current_exception();
-                    queue.stop();
+                    queue.abort();
                 }
                 checkpointed_spp = snapshot.spp;
             }
@@ -174,6 +233,7 @@ Film render_image(const std::vector<Renderer*>& renderers, const RenderOptions& 
         total.program_from_cache = total.program_from_cache && renderers[d]->stats().program_from_cache;
     }
     total.seconds = seconds;
+    total.dropped_devices = dropped_devices;
     total.first_pass_seconds = first_pass_seconds;
     if (stats) *stats = total;
     return film;

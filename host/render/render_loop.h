@@ -5,11 +5,13 @@
 //
 // A render may start from a checkpoint's film (its passes are not rendered again), may be
 // asked to stop (an interrupt: no new pass starts, the passes in flight finish), and may hand
-// out snapshots of the film now and then for a checkpoint. Every film it returns or hands out
+// out snapshots of the film now and then for a checkpoint. A device that fails while others
+// remain leaves the render and its pass goes to the others. Every film it returns or hands out
 // holds exactly passes 0 .. spp - 1.
 #pragma once
 
 #include <functional>
+#include <string>
 #include <vector>
 
 #include "film/film.h"
@@ -28,6 +30,10 @@ struct RenderSchedule {
     // while it is taken, not while it is written). 0: never.
     double checkpoint_seconds = 0;
     std::function<void(const Film&)> checkpoint;
+    // Called when a device fails during a pass while others remain: the device leaves the
+    // render, its pass goes to the others, and its film is as before that pass. The argument
+    // names the device and what failed. (The last device's failure fails the render.)
+    std::function<void(const std::string&)> device_dropped;
 };
 
 // renderers: one per device, built with the same scene and options. stats: totals over all

@@ -256,6 +256,10 @@ void Renderer::accumulate(Film& film, const PassSpec& pass, int first_item, int 
 }
 
 void Renderer::run_batch(Film& film, const PassSpec& pass, int first_item, int item_count) {
+    if (options_.debug_fail_after_launches >= 0 && launches_ >= options_.debug_fail_after_launches)
+        throw Error("OpenCL: launch failed (injected by --debug-fail-device) while rendering on " +
+                    device_.entry().name);
+    ++launches_;
     const auto launch_start = std::chrono::steady_clock::now();
     launch_and_read_back(batch_params(pass, first_item, item_count), item_count);
     const auto accumulate_start = std::chrono::steady_clock::now();

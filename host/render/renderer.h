@@ -40,6 +40,9 @@ struct RenderOptions {
     bool drop_non_finite = false;
     // Tests only: pixel whose sample 0 gets a NaN contribution (-1: none).
     int debug_nan_pixel = -1;
+    // Tests only: launches after which this renderer's launches fail, as a driver's would
+    // (-1: never).
+    int debug_fail_after_launches = -1;
     // Called now and then from the rendering thread: passes done, passes planned (0 if
     // time-bound), seconds so far.
     std::function<void(int, int, double)> progress;
@@ -85,6 +88,9 @@ struct RenderStats {
     static constexpr size_t kFirstDropped = 5;
     std::vector<DroppedSample> first_dropped;  // the first few of them
     std::vector<std::string> defines;
+    // Devices that failed during the render and left it, their passes going to the others:
+    // "device name: what failed".
+    std::vector<std::string> dropped_devices;
 };
 
 // One pass: one sample of every pixel (or, with pixel_stride k > 1, of every k-th pixel of every
@@ -143,6 +149,7 @@ private:
     cl::Buffer camera_out_, splats_, strategy_out_;
     int batch_items_ = 0;   // work items the output buffers hold
     int launch_items_ = 0;  // work items per launch now (at most batch_items_)
+    int launches_ = 0;
     int local_size_ = 0;  // 0 = the driver's choice
     int zsobol_log2_spp_ = 0, zsobol_base4_digits_ = 0;
     int splat_slots_ = 0;
