@@ -9,6 +9,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <vector>
 
 #include "scene/density_grid.h"
 #include "util/error.h"
@@ -141,6 +142,18 @@ TEST_F(OpenVdbFiles, UnusableFilesGetOneClearLine) {
 
     const std::string missing = (dir_ / "missing.vdb").string();
     EXPECT_EQ(read_error(missing, "density"), missing + ": no such file");
+}
+
+// A 10 KB file, found by fuzzing, whose damaged metadata states a length of gigabytes:
+// OpenVDB would allocate it (12 GiB in all, 23 s, before noticing); the allocation cap turns
+// it into the damaged-file line at once.
+TEST_F(OpenVdbFiles, StatedSizesBeyondTheFileAreRefused) {
+    const std::string damaged = std::string(CLBDPT_TEST_DATA_DIR) + "/damaged_sizes.vdb";
+    EXPECT_EQ(read_error(damaged, "density"),
+              damaged + ": not a readable OpenVDB file (it states sizes far beyond its own; damaged?)");
+    // The cap is gone afterwards: a large allocation succeeds.
+    std::vector<char> large(size_t(256) << 20);
+    EXPECT_EQ(large.size(), size_t(256) << 20);
 }
 
 #else

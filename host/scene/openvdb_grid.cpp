@@ -1,10 +1,12 @@
 // OpenVDB files into dense density grids (scene/density_grid.h). Built with OpenVDB when CMake
 // finds it (CLBDPT_HAS_OPENVDB); without it, asking for a file is a clear error.
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
 
 #include "scene/density_grid.h"
+#include "util/allocation_cap.h"
 #include "util/error.h"
 
 #ifdef CLBDPT_HAS_OPENVDB
@@ -73,6 +75,10 @@ DensityGrid read_openvdb_grid(const std::string& path, const std::string& grid_n
     openvdb::GridBase::Ptr base;
     std::string names;
     try {
+        // Nothing OpenVDB holds for a grid is one block larger than this, nor than the file
+        // (what it decompresses comes in leaf-sized pieces); a larger request is damage.
+        constexpr size_t kMinCap = size_t(64) << 20;
+        const AllocationCap cap(std::max<size_t>(kMinCap, std::filesystem::file_size(path)));
         openvdb::io::File file(path);
         file.open();
         for (auto it = file.beginName(); it != file.endName(); ++it) {
@@ -80,6 +86,8 @@ DensityGrid read_openvdb_grid(const std::string& path, const std::string& grid_n
         }
         if (file.hasGrid(grid_name)) base = file.readGrid(grid_name);
         file.close();
+    } catch (const std::bad_alloc&) {
+        throw Error(path + ": not a readable OpenVDB file (it states sizes far beyond its own; damaged?)");
     } catch (const openvdb::Exception& e) {
         throw Error(path + ": not a readable OpenVDB file (" + e.what() + ")");
     } catch (const std::exception& e) {
