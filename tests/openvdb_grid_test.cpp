@@ -144,13 +144,18 @@ TEST_F(OpenVdbFiles, UnusableFilesGetOneClearLine) {
     EXPECT_EQ(read_error(missing, "density"), missing + ": no such file");
 }
 
-// A 10 KB file, found by fuzzing, whose damaged metadata states a length of gigabytes:
-// OpenVDB would allocate it (12 GiB in all, 23 s, before noticing); the allocation cap turns
-// it into the damaged-file line at once.
-TEST_F(OpenVdbFiles, StatedSizesBeyondTheFileAreRefused) {
+// Two 10 KB files found by fuzzing: one whose damaged metadata states a length of gigabytes
+// (OpenVDB would allocate it: 12 GiB in all, 23 s, before noticing; the allocation cap turns
+// it into the damaged-file line at once), one whose damaged counts kept OpenVDB reading a
+// failed stream for minutes (a stream that throws at the first failed read ends it).
+TEST_F(OpenVdbFiles, DamagedSizesAndCountsAreRefusedAtOnce) {
     const std::string damaged = std::string(CLBDPT_TEST_DATA_DIR) + "/damaged_sizes.vdb";
     EXPECT_EQ(read_error(damaged, "density"),
               damaged + ": not a readable OpenVDB file (it states sizes far beyond its own; damaged?)");
+    // A file whose damaged counts made OpenVDB go on reading past its end, for minutes.
+    const std::string short_file = std::string(CLBDPT_TEST_DATA_DIR) + "/failed_stream.vdb";
+    EXPECT_EQ(read_error(short_file, "density"),
+              short_file + ": not a readable OpenVDB file (it ends early or cannot be read; damaged?)");
     // The cap is gone afterwards: a large allocation succeeds.
     std::vector<char> large(size_t(256) << 20);
     EXPECT_EQ(large.size(), size_t(256) << 20);

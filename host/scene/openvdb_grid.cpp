@@ -4,12 +4,16 @@
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
 
 #include "scene/density_grid.h"
 #include "util/allocation_cap.h"
 #include "util/error.h"
 
 #ifdef CLBDPT_HAS_OPENVDB
+#include <openvdb/io/Stream.h>
 #include <openvdb/openvdb.h>
 #endif
 
@@ -79,15 +83,23 @@ DensityGrid read_openvdb_grid(const std::string& path, const std::string& grid_n
         // (what it decompresses comes in leaf-sized pieces); a larger request is damage.
         constexpr size_t kMinCap = size_t(64) << 20;
         const AllocationCap cap(std::max<size_t>(kMinCap, std::filesystem::file_size(path)));
-        openvdb::io::File file(path);
-        file.open();
-        for (auto it = file.beginName(); it != file.endName(); ++it) {
-            names += (names.empty() ? "" : ", ") + it.gridName();
+        // Read through a stream that throws at the first read past the end or failed read:
+        // OpenVDB goes on reading a failed stream, and a damaged count (found by fuzzing) made
+        // it loop for minutes over reads that return nothing.
+        std::ifstream in(path, std::ios::binary);
+        in.exceptions(std::ios::failbit | std::ios::badbit);
+        openvdb::io::Stream stream(in, /*delayLoad=*/false);
+        std::vector<std::string> sorted_names;
+        for (const openvdb::GridBase::Ptr& grid : *stream.getGrids()) {
+            sorted_names.push_back(grid->getName());
+            if (!base && grid->getName() == grid_name) base = grid;
         }
-        if (file.hasGrid(grid_name)) base = file.readGrid(grid_name);
-        file.close();
+        std::sort(sorted_names.begin(), sorted_names.end());
+        for (const std::string& name : sorted_names) names += (names.empty() ? "" : ", ") + name;
     } catch (const std::bad_alloc&) {
         throw Error(path + ": not a readable OpenVDB file (it states sizes far beyond its own; damaged?)");
+    } catch (const std::ios_base::failure&) {
+        throw Error(path + ": not a readable OpenVDB file (it ends early or cannot be read; damaged?)");
     } catch (const openvdb::Exception& e) {
         throw Error(path + ": not a readable OpenVDB file (" + e.what() + ")");
     } catch (const std::exception& e) {
