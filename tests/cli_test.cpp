@@ -272,6 +272,7 @@ TEST_F(CliTest, FailingDeviceLosesNothing) {
         std::ifstream in(out("two.json"));
         const nlohmann::json j = nlohmann::json::parse(in);
         EXPECT_EQ(j["spp"], 6);
+        EXPECT_EQ(j["samples"], 6 * 24 * 24);  // the failed pass's samples do not count
         EXPECT_EQ(j["dropped_devices"].size(), 1u);
         const std::vector<float> image = clbdpt::read_image_rgb(out("two.exr"), &w, &h);
         ASSERT_EQ(image.size(), reference.size());

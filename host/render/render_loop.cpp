@@ -159,19 +159,24 @@ Film render_image(const std::vector<Renderer*>& renderers, const RenderOptions& 
     int threads_running = int(renderers.size());
 
     std::vector<std::string> dropped_devices;
-    // With other devices to take over, a device's film is kept as it was before each pass: a
-    // pass that fails half-way leaves part of its samples in the film, which are taken out
-    // again by restoring the copy (exactly, unlike subtracting them).
+    // With other devices to take over, a device's film (and its counters) is kept as it was
+    // before each pass: a pass that fails half-way leaves part of its samples in the film,
+    // which are taken out again by restoring the copy (exactly, unlike subtracting them).
     const bool can_fail_over = renderers.size() > 1;
     auto worker = [&](size_t d) {
         Film before_pass;
+        RenderStats stats_before_pass;
         for (int pass; (pass = queue.take()) >= 0;) {
-            if (can_fail_over) before_pass = films[d];
+            if (can_fail_over) {
+                before_pass = films[d];
+                stats_before_pass = renderers[d]->stats();
+            }
             try {
                 renderers[d]->render_passes(films[d], uint32_t(pass), 1);
             } catch (const std::exception& e) {
                 if (can_fail_over && queue.give_back(pass)) {
                     films[d] = std::move(before_pass);
+                    renderers[d]->restore_stats(stats_before_pass);
                     std::lock_guard<std::mutex> lock(failure_mutex);
                     dropped_devices.push_back(renderers[d]->device().entry().name + ": " + e.what());
                     if (schedule.device_dropped) schedule.device_dropped(dropped_devices.back());

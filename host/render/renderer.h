@@ -123,6 +123,8 @@ public:
     // Zeroes samples, rays, dropped samples, profile and build time (the kernel flags and cache
     // flag stay).
     void reset_counters();
+    // Puts the counters back as they were (a failed pass's samples and rays do not count).
+    void restore_stats(const RenderStats& stats) { stats_ = stats; }
     const DeviceContext& device() const { return device_; }
     const DeviceScene& scene() const { return scene_; }
 
