@@ -93,8 +93,9 @@ set +e
   >"$log" 2>&1
 status=$?
 set -e
-execs=$(cat "$log" "$build"/logs/fuzz-*.log 2>/dev/null | grep -o 'stat::number_of_executed_units: *[0-9]*' |
-  awk '{s += $2} END {print s + 0}')
+# With -jobs, each job's statistics are in its own log (and repeated in the main one).
+stat_logs=$(ls "$build"/logs/fuzz-*.log 2>/dev/null || echo "$log")
+execs=$(cat $stat_logs | grep -o 'stat::number_of_executed_units: *[0-9]*' | awk '{s += $2} END {print s + 0}')
 echo "fuzz: $seconds s x $jobs job(s): $execs executions; corpus $(ls "$build/corpus" | wc -l) inputs;" \
   "crashes: $(ls "$build/crashes" | wc -l) (in $build/crashes); logs $log, $build/logs"
 exit "$status"
