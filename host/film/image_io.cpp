@@ -3,11 +3,9 @@
 // write never leaves a truncated image where the user expects a finished one.
 #include "film/image_io.h"
 
-#include <unistd.h>
 
 #include <algorithm>
 #include <cctype>
-#include <cerrno>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
