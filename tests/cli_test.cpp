@@ -7,6 +7,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -226,9 +227,18 @@ TEST_F(CliTest, AovRendersTheFirstHit) {
     EXPECT_TRUE(fs::exists(out("n.exr")));
 }
 
-// Two PoCL devices share one render: the passes split between them, the image is the same as
-// one device's (each pass is the same computation; the sums are merged in double precision, so
-// only the last bits of a double could differ, far below what a float image keeps).
+// Exact equality of two images' floats (an EXR keeps them as rendered).
+void expect_same_image(const std::string& a_path, const std::string& b_path) {
+    int w = 0, h = 0, w2 = 0, h2 = 0;
+    const std::vector<float> a = clbdpt::read_image_rgb(a_path, &w, &h);
+    const std::vector<float> b = clbdpt::read_image_rgb(b_path, &w2, &h2);
+    ASSERT_EQ(a.size(), b.size());
+    ASSERT_FALSE(a.empty());
+    EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(float)), 0) << a_path << " differs from " << b_path;
+}
+
+// Two PoCL devices share one render: the work units split between them, and the image is one
+// device's bit for bit (results are added in unit order whoever rendered them).
 TEST_F(CliTest, TwoDevicesShareOneRender) {
     const std::string scene = " " + std::string(CLBDPT_SCENES_DIR) + "/cornell-box/cornell-box.json --spp 6 --width 24 --height 24";
     CommandResult one = run("render" + scene + " -o " + out("one.exr"));
@@ -239,20 +249,43 @@ TEST_F(CliTest, TwoDevicesShareOneRender) {
     std::ifstream in(out("two.json"));
     nlohmann::json j = nlohmann::json::parse(in);
     EXPECT_EQ(j["devices"], 2);
-    int w = 0, h = 0, w2 = 0, h2 = 0;
-    std::vector<float> a = clbdpt::read_image_rgb(out("one.exr"), &w, &h);
-    std::vector<float> b = clbdpt::read_image_rgb(out("two.exr"), &w2, &h2);
-    ASSERT_EQ(a.size(), b.size());
-    for (size_t i = 0; i < a.size(); ++i) EXPECT_NEAR(a[i], b[i], 1e-6f * (1.0f + a[i])) << i;
+    expect_same_image(out("one.exr"), out("two.exr"));
 }
 
-// The default integrator (auto) runs the efficiency pilot when the render is long enough for it
-// to pay off, reports what it measured and renders with the candidate it predicts best; short
-// renders use plain bdpt; --light-subpaths / --connections fix the mix by hand.
+// Devices of unequal speed (PoCL's pthread device on two threads beside its single-threaded
+// basic device): the image is still one device's bit for bit, at two film sizes (one unit per
+// pass, and several units per pass so that passes are split between the devices); the summary
+// and --stats report each device's share, which add up to every sample once.
+TEST_F(CliTest, UnequalDevicesShareOneRenderExactly) {
+    for (const char* size : {"--width 24 --height 24 --spp 6", "--width 96 --height 96 --spp 4"}) {
+        const std::string render = "render " + std::string(CLBDPT_SCENES_DIR) +
+                                   "/cornell-box/cornell-box.json --integrator bdpt " + size;
+        CommandResult one = run(render + " -o " + out("one.exr"));
+        ASSERT_EQ(one.status, 0) << one.output;
+        CommandResult two = run(render + " --device all -o " + out("two.exr") + " --stats " + out("two.json"),
+                                "POCL_DEVICES='pthread basic' POCL_MAX_PTHREAD_COUNT=2 ");
+        ASSERT_EQ(two.status, 0) << two.output;
+        EXPECT_NE(two.output.find("% of the samples"), std::string::npos) << two.output;
+        expect_same_image(out("one.exr"), out("two.exr"));
+        std::ifstream in(out("two.json"));
+        const nlohmann::json j = nlohmann::json::parse(in);
+        ASSERT_EQ(j["device_shares"].size(), 2u) << j.dump(2);
+        uint64_t samples = 0;
+        double share = 0;
+        for (const nlohmann::json& d : j["device_shares"]) {
+            samples += d["samples"].get<uint64_t>();
+            share += d["share"].get<double>();
+            EXPECT_GE(d["samples_per_second"].get<double>(), 0.0);
+        }
+        EXPECT_EQ(samples, j["samples"].get<uint64_t>());
+        EXPECT_NEAR(share, 1.0, 1e-12);
+    }
+}
+
 // A device whose launches fail mid-render (injected: device K fails after N launches, here in
-// the middle of a pass of 9 launches) leaves the render with one warning; its film is restored
-// to before that pass, the pass goes to the other device, and the image equals one device's
-// render within float rounding. The last device failing fails the render, writing nothing.
+// the middle of a pass of 9 launches) leaves the render with one warning; the run it was
+// rendering goes to the other device, and the image equals one device's render bit for bit.
+// The last device failing fails the render, writing nothing.
 TEST_F(CliTest, FailingDeviceLosesNothing) {
     const std::string render = "render " + std::string(CLBDPT_SCENES_DIR) +
                                "/cornell-box/cornell-box.json --integrator bdpt --spp 6 --width 24 --height 24 "
@@ -260,8 +293,6 @@ TEST_F(CliTest, FailingDeviceLosesNothing) {
     const std::string two_devices = "POCL_DEVICES='pthread pthread' POCL_MAX_PTHREAD_COUNT=1 ";
     CommandResult one = run(render + " -o " + out("one.exr"));
     ASSERT_EQ(one.status, 0) << one.output;
-    int w = 0, h = 0;
-    const std::vector<float> reference = clbdpt::read_image_rgb(out("one.exr"), &w, &h);
     for (const char* failing : {"1:5", "0:14"}) {
         CommandResult r = run(render + " --device all --debug-fail-device " + failing + " -o " + out("two.exr") +
                                   " --stats " + out("two.json"),
@@ -274,9 +305,7 @@ TEST_F(CliTest, FailingDeviceLosesNothing) {
         EXPECT_EQ(j["spp"], 6);
         EXPECT_EQ(j["samples"], 6 * 24 * 24);  // the failed pass's samples do not count
         EXPECT_EQ(j["dropped_devices"].size(), 1u);
-        const std::vector<float> image = clbdpt::read_image_rgb(out("two.exr"), &w, &h);
-        ASSERT_EQ(image.size(), reference.size());
-        for (size_t i = 0; i < image.size(); ++i) ASSERT_NEAR(image[i], reference[i], 1e-6f * (1.0f + reference[i])) << i;
+        expect_same_image(out("one.exr"), out("two.exr"));
     }
     fs::remove(out("one.exr"));
     fs::remove(out("two.exr"));
@@ -287,6 +316,9 @@ TEST_F(CliTest, FailingDeviceLosesNothing) {
     EXPECT_TRUE(dir_is_empty());
 }
 
+// The default integrator (auto) runs the efficiency pilot when the render is long enough for it
+// to pay off, reports what it measured and renders with the candidate it predicts best; short
+// renders use plain bdpt; --light-subpaths / --connections fix the mix by hand.
 TEST_F(CliTest, AutoChoosesTheStrategyMixByPilot) {
     const std::string scene = " " + std::string(CLBDPT_SCENES_DIR) + "/lamp-ceiling/lamp-ceiling.json --width 32 --height 32";
     CommandResult r = run("render" + scene + " --spp 160 -o " + out("auto.exr") + " --stats " + out("auto.json"));

@@ -1,12 +1,12 @@
 #include "render/render_loop.h"
 
-#include <atomic>
 #include <chrono>
-#include <condition_variable>
 #include <exception>
 #include <mutex>
 #include <string>
 #include <thread>
+
+#include "render/unit_queue.h"
 
 namespace clbdpt {
 
@@ -19,227 +19,132 @@ double seconds_since(Clock::time_point start) { return std::chrono::duration<dou
 // How often the progress callback runs while passes are in flight.
 constexpr auto kProgressInterval = std::chrono::milliseconds(200);
 
-// Hands out pass numbers to the device threads and lets the coordinating thread hold them
-// between passes (for a snapshot of the films) or stop them. A pass that a failed device gave
-// back is handed out first, even to a held or stopped queue: every film the render hands out
-// must hold passes first .. next - 1 with none missing.
-class PassQueue {
-public:
-    PassQueue(int first, int end, bool timed, double budget, Clock::time_point start, int devices)
-        : next_(first), first_(first), end_(end), timed_(timed), budget_(budget), start_(start), devices_(devices) {}
-
-    // The next pass to render, or -1 when the render is over for this device. Waits while the
-    // queue is held, and at the end until no pass is in flight: a failing device may yet give
-    // one back.
-    int take() {
-        std::unique_lock<std::mutex> lock(mutex_);
-        for (;;) {
-            if (aborted_) return leave();
-            if (!given_back_.empty()) {
-                const int pass = given_back_.back();
-                given_back_.pop_back();
-                ++in_flight_;
-                return pass;
-            }
-            // A time-bound render has at least one pass, however small the budget.
-            const bool no_new_pass =
-                stopped_ || (timed_ ? next_ > first_ && seconds_since(start_) >= budget_ : next_ >= end_);
-            if (no_new_pass) {
-                if (in_flight_ == 0) return leave();
-            } else if (!held_) {
-                ++in_flight_;
-                return next_++;
-            }
-            changed_.wait(lock);
-        }
-    }
-    void done() {
-        std::lock_guard<std::mutex> lock(mutex_);
-        --in_flight_;
-        ++passes_done_;
-        changed_.notify_all();
-    }
-    // A device failed during `pass`: true (the pass goes to the other devices, the caller's
-    // device leaves the render) unless it was the last one.
-    bool give_back(int pass) {
-        std::lock_guard<std::mutex> lock(mutex_);
-        if (devices_ <= 1) return false;
-        --devices_;
-        --in_flight_;
-        given_back_.push_back(pass);
-        changed_.notify_all();
-        return true;
-    }
-    // Holds the queue and waits until no pass is in flight or given back; then the films hold
-    // passes [first, next). Returns false instead if the render stops.
-    bool hold() {
-        std::unique_lock<std::mutex> lock(mutex_);
-        held_ = true;
-        changed_.wait(lock, [&] { return (in_flight_ == 0 && given_back_.empty()) || stopped_ || aborted_; });
-        return !stopped_ && !aborted_;
-    }
-    void release() {
-        std::lock_guard<std::mutex> lock(mutex_);
-        held_ = false;
-        changed_.notify_all();
-    }
-    // No new pass starts (an interrupt); passes given back are still rendered.
-    void stop() {
-        std::lock_guard<std::mutex> lock(mutex_);
-        stopped_ = true;
-        changed_.notify_all();
-    }
-    // The render has failed: nothing more starts.
-    void abort() {
-        std::lock_guard<std::mutex> lock(mutex_);
-        aborted_ = true;
-        changed_.notify_all();
-    }
-    // Waits until the threads are finished (all passes taken and done) or `period` has passed.
-    // Returns true when finished.
-    template <typename Duration>
-    bool wait_finished(Duration period, const int& threads_running) {
-        std::unique_lock<std::mutex> lock(mutex_);
-        return changed_.wait_for(lock, period, [&] { return threads_running == 0; });
-    }
-    void thread_exited(int* threads_running) {
-        std::lock_guard<std::mutex> lock(mutex_);
-        --*threads_running;
-        changed_.notify_all();
-    }
-    int passes_done() {
-        std::lock_guard<std::mutex> lock(mutex_);
-        return passes_done_;
-    }
-
-private:
-    std::mutex mutex_;
-    std::condition_variable changed_;
-    int next_, first_, end_;
-    bool timed_;
-    double budget_;
-    Clock::time_point start_;
-    int in_flight_ = 0;
-    int passes_done_ = 0;
-    int devices_;  // devices that have not left the render
-
-    int leave() {
-        --devices_;
-        changed_.notify_all();
-        return -1;
-    }
-    std::vector<int> given_back_;
-    bool held_ = false;
-    bool stopped_ = false;
-    bool aborted_ = false;
-};
-
-// The films of all devices as one, in device order (the order every merge uses).
-Film merge(const std::vector<Film>& films) {
-    Film film(films.front().width, films.front().height);
-    for (const Film& f : films) film.add(f);
-    return film;
-}
-
 }  // namespace
 
-Film render_image(const std::vector<Renderer*>& renderers, const RenderOptions& options, RenderStats* stats,
-                  const RenderSchedule& schedule) {
-    const Camera& camera = renderers.front()->scene().camera;
+std::string DeviceWorker::name() const { return renderer_.device().entry().name; }
+
+std::vector<RenderedItems> DeviceWorker::render(const std::vector<ItemRun>& runs,
+                                                const std::function<bool()>& cancelled) {
+    std::vector<RenderedItems> out;
+    for (const ItemRun& run : runs) {
+        if (cancelled && cancelled()) break;
+        PassSpec pass;
+        pass.sample_index = pass.position_sample_index = run.pass;
+        pass.seed = pass.position_seed = renderer_.options().seed;
+        out.push_back(renderer_.render_items(pass, run.first_item, run.item_count, cancelled));
+    }
+    return out;
+}
+
+Film render_image(const std::vector<UnitWorker*>& workers, int width, int height, const RenderOptions& options,
+                  RenderStats* stats, const RenderSchedule& schedule) {
     const bool timed = options.time_budget > 0;
     const int first_pass = schedule.resume ? schedule.resume->spp : 0;
     const int planned = timed ? 0 : options.spp;
-    std::vector<Film> films(renderers.size(), Film(camera.width, camera.height));
-    if (schedule.resume) films.front() = *schedule.resume;
+    Film film = schedule.resume ? *schedule.resume : Film(width, height);
+    const WorkUnits units(width * height, first_pass);
     const auto start = Clock::now();
-    PassQueue queue(first_pass, options.spp, timed, options.time_budget, start, int(renderers.size()));
+    UnitQueue queue(units, &film, options.spp - first_pass, options.time_budget, start, int(workers.size()));
     std::exception_ptr failure;
     std::mutex failure_mutex;
-    std::atomic<double> first_pass_seconds{0.0};
-    int threads_running = int(renderers.size());
-
     std::vector<std::string> dropped_devices;
-    // With other devices to take over, a device's film (and its counters) is kept as it was
-    // before each pass: a pass that fails half-way leaves part of its samples in the film,
-    // which are taken out again by restoring the copy (exactly, unlike subtracting them).
-    const bool can_fail_over = renderers.size() > 1;
-    auto worker = [&](size_t d) {
-        Film before_pass;
-        RenderStats stats_before_pass;
-        for (int pass; (pass = queue.take()) >= 0;) {
-            if (can_fail_over) {
-                before_pass = films[d];
-                stats_before_pass = renderers[d]->stats();
-            }
+
+    auto worker = [&](size_t w) {
+        for (std::optional<UnitQueue::Grab> grab; (grab = queue.take(int(w)));) {
+            const auto grab_start = Clock::now();
+            std::vector<RenderedItems> results;
             try {
-                renderers[d]->render_passes(films[d], uint32_t(pass), 1);
+                const auto done = grab->done;
+                results = workers[w]->render(units.runs(grab->begin, grab->end), [done] { return done->load(); });
             } catch (const std::exception& e) {
-                if (can_fail_over && queue.give_back(pass)) {
-                    films[d] = std::move(before_pass);
-                    renderers[d]->restore_stats(stats_before_pass);
-                    std::lock_guard<std::mutex> lock(failure_mutex);
-                    dropped_devices.push_back(renderers[d]->device().entry().name + ": " + e.what());
-                    if (schedule.device_dropped) schedule.device_dropped(dropped_devices.back());
-                    break;
-                }
                 std::lock_guard<std::mutex> lock(failure_mutex);
-                if (!failure) failure = std::current_exception();
-                queue.abort();
+                if (queue.fail(int(w), *grab)) {
+                    dropped_devices.push_back(workers[w]->name() + ": " + e.what());
+                    if (schedule.device_dropped) schedule.device_dropped(dropped_devices.back());
+                } else {
+                    if (!failure) failure = std::current_exception();
+                    queue.abort();
+                }
                 break;
             }
-            if (queue.passes_done() == 0) first_pass_seconds = seconds_since(start);
-            queue.done();
+            queue.complete(int(w), *grab, std::move(results), seconds_since(grab_start));
         }
-        queue.thread_exited(&threads_running);
+        queue.worker_exited();
     };
     if (schedule.stop_requested && schedule.stop_requested()) queue.stop();
     std::vector<std::thread> threads;
-    for (size_t d = 0; d < renderers.size(); ++d) threads.emplace_back(worker, d);
+    for (size_t w = 0; w < workers.size(); ++w) threads.emplace_back(worker, w);
 
-    // This thread reports progress, watches for a stop request and takes the snapshots.
+    // This thread reports progress, watches for a stop request and hands out the snapshots.
     auto last_checkpoint = Clock::now();
     int checkpointed_spp = first_pass;
     for (;;) {
-        if (queue.wait_finished(kProgressInterval, threads_running)) break;
+        const bool finished = queue.wait_finished(kProgressInterval);
         if (schedule.stop_requested && schedule.stop_requested()) queue.stop();
         if (options.progress) options.progress(first_pass + queue.passes_done(), planned, seconds_since(start));
-        if (schedule.checkpoint && schedule.checkpoint_seconds > 0 &&
-            seconds_since(last_checkpoint) >= schedule.checkpoint_seconds) {
-            Film snapshot;
-            if (queue.hold()) snapshot = merge(films);
-            queue.release();
+        if (schedule.checkpoint && schedule.checkpoint_seconds > 0) {
             // Written while the devices go on; a snapshot with no new pass is not written again.
-            if (snapshot.spp > checkpointed_spp) {
+            std::optional<Film> snapshot = queue.take_snapshot();
+            if (snapshot && snapshot->spp > checkpointed_spp) {
                 try {
-                    schedule.checkpoint(snapshot);
+                    schedule.checkpoint(*snapshot);
                 } catch (...) {
                     // Rethrown once the device threads are joined.
                     std::lock_guard<std::mutex> lock(failure_mutex);
                     if (!failure) failure = std::current_exception();
                     queue.abort();
                 }
-                checkpointed_spp = snapshot.spp;
+                checkpointed_spp = snapshot->spp;
             }
-            last_checkpoint = Clock::now();
+            if (seconds_since(last_checkpoint) >= schedule.checkpoint_seconds) {
+                queue.request_snapshot();
+                last_checkpoint = Clock::now();
+            }
         }
+        if (finished) break;
     }
     for (std::thread& t : threads) t.join();
     const double seconds = seconds_since(start);
     if (failure) std::rethrow_exception(failure);
-    const int passes_done = queue.passes_done();
-    if (options.progress) options.progress(first_pass + passes_done, planned, seconds);
+    if (options.progress) options.progress(first_pass + queue.passes_done(), planned, seconds);
 
-    Film film = merge(films);
+    if (stats) {
+        RenderStats total;
+        total.add_counts(queue.counts());
+        total.seconds = seconds;
+        total.first_pass_seconds = queue.first_pass_seconds();
+        total.dropped_devices = dropped_devices;
+        const std::vector<UnitQueue::WorkerShare> shares = queue.shares();
+        for (size_t w = 0; w < workers.size(); ++w)
+            total.device_shares.push_back(
+                {workers[w]->name(), shares[w].samples, shares[w].wasted_samples, shares[w].busy_seconds});
+        *stats = total;
+    }
+    return film;
+}
+
+Film render_image(const std::vector<Renderer*>& renderers, const RenderOptions& options, RenderStats* stats,
+                  const RenderSchedule& schedule, const std::vector<UnitWorker*>& more_workers) {
+    std::vector<std::unique_ptr<DeviceWorker>> devices;
+    std::vector<UnitWorker*> workers;
+    for (Renderer* r : renderers) {
+        devices.push_back(std::make_unique<DeviceWorker>(*r));
+        workers.push_back(devices.back().get());
+    }
+    workers.insert(workers.end(), more_workers.begin(), more_workers.end());
+    const Camera& camera = renderers.front()->scene().camera;
     RenderStats total;
+    Film film = render_image(workers, camera.width, camera.height, options, &total, schedule);
     total.defines = renderers.front()->stats().defines;
     total.program_from_cache = true;
-    for (size_t d = 0; d < renderers.size(); ++d) {
-        total.add(renderers[d]->stats());
-        total.program_from_cache = total.program_from_cache && renderers[d]->stats().program_from_cache;
+    for (Renderer* r : renderers) {
+        const RenderStats& rs = r->stats();
+        total.profile.kernel_seconds += rs.profile.kernel_seconds;
+        total.profile.transfer_seconds += rs.profile.transfer_seconds;
+        total.profile.accumulate_seconds += rs.profile.accumulate_seconds;
+        total.build_seconds += rs.build_seconds;
+        total.program_from_cache = total.program_from_cache && rs.program_from_cache;
     }
-    total.seconds = seconds;
-    total.dropped_devices = dropped_devices;
-    total.first_pass_seconds = first_pass_seconds;
     if (stats) *stats = total;
     return film;
 }

@@ -1,12 +1,13 @@
-// The whole render on one or more devices: passes (one sample of every pixel, numbered from 0)
-// are handed out one at a time to whichever device is free, each device adds into its own film,
-// and the films are merged in device order at the end. With a time budget, devices start passes
+// The whole render on one or more devices (or, under MPI, devices of other processes): passes
+// (one sample of every pixel, numbered from 0) are cut into work units (render/work_units.h),
+// which a UnitQueue shares out by each device's measured rate and adds to one film in unit order,
+// so the image does not depend on which device rendered what. With a time budget, passes start
 // until it is spent (whole passes only).
 //
 // A render may start from a checkpoint's film (its passes are not rendered again), may be
-// asked to stop (an interrupt: no new pass starts, the passes in flight finish), and may hand
+// asked to stop (an interrupt: no new pass starts, the pass in flight finishes), and may hand
 // out snapshots of the film now and then for a checkpoint. A device that fails while others
-// remain leaves the render and its pass goes to the others. Every film it returns or hands out
+// remain leaves the render and its work goes to the others. Every film it returns or hands out
 // holds exactly passes 0 .. spp - 1.
 #pragma once
 
@@ -16,6 +17,7 @@
 
 #include "film/film.h"
 #include "render/renderer.h"
+#include "render/work_units.h"
 
 namespace clbdpt {
 
@@ -26,8 +28,8 @@ struct RenderSchedule {
     const Film* resume = nullptr;
     // Polled before each pass; true stops the render after the passes in flight.
     std::function<bool()> stop_requested;
-    // Called with a snapshot of the film every checkpoint_seconds (devices pause between passes
-    // while it is taken, not while it is written). 0: never.
+    // Called with a snapshot of the film every checkpoint_seconds (taken at the next pass
+    // boundary; the devices do not wait for it). 0: never.
     double checkpoint_seconds = 0;
     std::function<void(const Film&)> checkpoint;
     // Called when a device fails during a pass while others remain: the device leaves the
@@ -36,10 +38,39 @@ struct RenderSchedule {
     std::function<void(const std::string&)> device_dropped;
 };
 
-// renderers: one per device, built with the same scene and options. stats: totals over all
-// devices for this run, seconds = wall time. Without a time budget the render ends at
-// options.spp passes in all (the resumed ones included).
+// Something that renders runs of work items: a device of this process (a Renderer) or, under
+// MPI, a device of another process (mpi/remote_worker.h).
+class UnitWorker {
+public:
+    virtual ~UnitWorker() = default;
+    virtual std::string name() const = 0;
+    // Renders the runs in order, with the render's seed. cancelled, polled between launches:
+    // true means another device has delivered these runs, and the results will be discarded.
+    virtual std::vector<RenderedItems> render(const std::vector<ItemRun>& runs,
+                                              const std::function<bool()>& cancelled) = 0;
+};
+
+// A Renderer as a UnitWorker.
+class DeviceWorker : public UnitWorker {
+public:
+    explicit DeviceWorker(Renderer& renderer) : renderer_(renderer) {}
+    std::string name() const override;
+    std::vector<RenderedItems> render(const std::vector<ItemRun>& runs,
+                                      const std::function<bool()>& cancelled) override;
+
+private:
+    Renderer& renderer_;
+};
+
+// renderers: one per device, built with the same scene and options; more_workers: devices of
+// other processes (mpi/cluster.h), after them. stats: totals over all devices for this run,
+// seconds = wall time. Without a time budget the render ends at options.spp passes in all (the
+// resumed ones included).
 Film render_image(const std::vector<Renderer*>& renderers, const RenderOptions& options, RenderStats* stats,
-                  const RenderSchedule& schedule = {});
+                  const RenderSchedule& schedule = {}, const std::vector<UnitWorker*>& more_workers = {});
+// The same with any workers; stats then holds the counters and device shares only (the caller
+// adds its renderers' profiles and build times).
+Film render_image(const std::vector<UnitWorker*>& workers, int width, int height, const RenderOptions& options,
+                  RenderStats* stats, const RenderSchedule& schedule = {});
 
 }  // namespace clbdpt

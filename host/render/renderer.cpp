@@ -192,7 +192,7 @@ bool Renderer::sample_is_finite(int item) const {
     return true;
 }
 
-void Renderer::drop_sample(int item, int pixel, const PassSpec& pass) {
+void Renderer::drop_sample(RenderedItems& out, int item, int pixel, const PassSpec& pass) const {
     const cl_float4& c = camera_host_[size_t(item)];
     DroppedSample d;
     d.x = pixel % scene_.camera.width;
@@ -208,54 +208,50 @@ void Renderer::drop_sample(int item, int pixel, const PassSpec& pass) {
                     std::to_string(d.sample) +
                     (d.s >= 0 ? " from strategy s=" + std::to_string(d.s) + " t=" + std::to_string(d.t) : "") +
                     " (a bug: please report it with the scene)");
-    ++stats_.dropped_samples;
-    if (stats_.first_dropped.size() < RenderStats::kFirstDropped) stats_.first_dropped.push_back(d);
+    ++out.counts.dropped_samples;
+    if (out.counts.first_dropped.size() < ItemCounts::kFirstDropped) out.counts.first_dropped.push_back(d);
 }
 
-void Renderer::accumulate(Film& film, const PassSpec& pass, int first_item, int item_count) {
-    std::vector<bool> dropped(size_t(item_count), false);
+void Renderer::collect(RenderedItems& out, const PassSpec& pass, int first_item, int item_count) const {
+    // Item i of this launch is item first_item - out.first_item + i of `out`.
+    const int offset = first_item - out.first_item;
     for (int i = 0; i < item_count; ++i) {
         const int pixel = render_item_pixel(first_item + i, scene_.camera.width, pass.pixel_stride);
+        float* dst = &out.camera[size_t(offset + i) * 3];
         if (!sample_is_finite(i)) {
-            drop_sample(i, pixel, pass);
-            dropped[size_t(i)] = true;
+            drop_sample(out, i, pixel, pass);
+            out.dropped_items.push_back(offset + i);
             continue;
         }
         const cl_float4& c = camera_host_[size_t(i)];
-        double* dst = &film.camera_sum[size_t(pixel) * 3];
-        dst[0] += c.s[0];
-        dst[1] += c.s[1];
-        dst[2] += c.s[2];
-        stats_.rays += uint64_t(c.s[3]);
+        dst[0] = c.s[0];
+        dst[1] = c.s[1];
+        dst[2] = c.s[2];
+        out.counts.rays += uint64_t(c.s[3]);
         const SplatRecord* splats = splats_host_.data() + size_t(i) * splat_slots_;
         for (int k = 0; k < splat_slots_; ++k) {
             const SplatRecord& r = splats[k];
-            if (r.pixel < 0) continue;
-            double* light = &film.light_sum[size_t(r.pixel) * 3];
-            light[0] += r.r;
-            light[1] += r.g;
-            light[2] += r.b;
+            if (r.pixel >= 0) out.splats.push_back({r.pixel, r.r, r.g, r.b});
         }
     }
     if (strategy_slots_ > 0) {
-        const size_t pixels = size_t(film.width) * film.height;
-        if (film.strategy_sum.empty()) {
-            film.strategy_sum.assign(pixels * 3 * strategy_slots_, 0.0);
-            film.strategy_stride = options_.max_depth + 3;
-        }
-        for (size_t k = 0; k < size_t(item_count) * strategy_slots_; ++k) {
-            const SplatRecord& r = strategy_host_[k];
-            if (r.pixel < 0 || dropped[k / size_t(strategy_slots_)]) continue;
-            double* dst = &film.strategy_sum[((k % strategy_slots_) * pixels + size_t(r.pixel)) * 3];
-            dst[0] += r.r;
-            dst[1] += r.g;
-            dst[2] += r.b;
+        auto dropped = std::lower_bound(out.dropped_items.begin(), out.dropped_items.end(), offset);
+        for (int i = 0; i < item_count; ++i) {
+            if (dropped != out.dropped_items.end() && *dropped == offset + i) {
+                ++dropped;
+                continue;
+            }
+            const SplatRecord* records = strategy_host_.data() + size_t(i) * strategy_slots_;
+            for (int slot = 0; slot < strategy_slots_; ++slot)
+                if (records[slot].pixel >= 0)
+                    out.strategy_splats.push_back(
+                        {slot, {records[slot].pixel, records[slot].r, records[slot].g, records[slot].b}});
         }
     }
-    stats_.samples += uint64_t(item_count);
+    out.counts.samples += uint64_t(item_count);
 }
 
-void Renderer::run_batch(Film& film, const PassSpec& pass, int first_item, int item_count) {
+void Renderer::run_batch(RenderedItems& out, const PassSpec& pass, int first_item, int item_count) {
     if (options_.debug_fail_after_launches >= 0 && launches_ >= options_.debug_fail_after_launches)
         throw Error("OpenCL: launch failed (injected by --debug-fail-device) while rendering on " +
                     device_.entry().name);
@@ -264,7 +260,7 @@ void Renderer::run_batch(Film& film, const PassSpec& pass, int first_item, int i
     launch_and_read_back(batch_params(pass, first_item, item_count), item_count);
     const auto accumulate_start = std::chrono::steady_clock::now();
     limit_launch_size(std::chrono::duration<double>(accumulate_start - launch_start).count(), item_count);
-    accumulate(film, pass, first_item, item_count);
+    collect(out, pass, first_item, item_count);
     stats_.profile.accumulate_seconds +=
         std::chrono::duration<double>(std::chrono::steady_clock::now() - accumulate_start).count();
 }
@@ -288,13 +284,33 @@ void Renderer::render_passes(Film& film, uint32_t first_sample, int count) {
     }
 }
 
-void Renderer::render_pass(Film& film, const PassSpec& pass) {
+RenderedItems Renderer::render_items(const PassSpec& pass, int first_item, int item_count,
+                                    const std::function<bool()>& cancelled) {
     if (pass.pixel_stride < 1) throw Error("pixel stride must be at least 1");
-    const int items = render_item_count(scene_.camera.width, scene_.camera.height, pass.pixel_stride);
-    for (int first = 0, count; first < items; first += count) {
-        count = std::min(launch_items_, items - first);
-        run_batch(film, pass, first, count);
+    RenderedItems out;
+    out.sample_index = pass.sample_index;
+    out.first_item = first_item;
+    out.item_count = item_count;
+    out.pixel_stride = pass.pixel_stride;
+    out.camera.assign(size_t(item_count) * 3, 0.0f);
+    // Light subpaths leave a few splats each (measured: 2-4 at max depth 5 on the bundled
+    // scenes); reserving them saves most of the vector's regrowth.
+    if (splat_slots_ > 0) out.splats.reserve(size_t(item_count) * std::min(splat_slots_, 4));
+    out.strategy_slots = strategy_slots_;
+    out.strategy_stride = strategy_slots_ > 0 ? options_.max_depth + 3 : 0;
+    for (int first = first_item, count, end = first_item + item_count; first < end; first += count) {
+        if (cancelled && cancelled()) break;
+        count = std::min(launch_items_, end - first);
+        run_batch(out, pass, first, count);
     }
+    return out;
+}
+
+void Renderer::render_pass(Film& film, const PassSpec& pass) {
+    const int items = render_item_count(scene_.camera.width, scene_.camera.height, pass.pixel_stride);
+    const RenderedItems rendered = render_items(pass, 0, items);
+    add_to_film(film, rendered);
+    stats_.add_counts(rendered.counts);
     ++film.spp;
 }
 

@@ -12,6 +12,7 @@
 
 #include "device/opencl.h"
 #include "film/film.h"
+#include "film/rendered_items.h"
 #include "render/device_scene.h"
 #include "render/features.h"
 #include "render/scene_buffers.h"
@@ -57,14 +58,6 @@ struct RenderProfile {
     double accumulate_seconds = 0;
 };
 
-// A sample dropped for a non-finite value: its pixel, sample index and the first strategy
-// (s, t) that gave one (-1, -1 if the kernel did not name one).
-struct DroppedSample {
-    int x = 0, y = 0;
-    uint32_t sample = 0;
-    int s = -1, t = -1;
-};
-
 struct RenderStats {
     double seconds = 0;           // wall time of the passes (excluding the kernel build)
     double first_pass_seconds = 0; // wall time until the first pass was done
@@ -80,17 +73,33 @@ struct RenderStats {
             if (first_dropped.size() < kFirstDropped) first_dropped.push_back(d);
         build_seconds += other.build_seconds;
     }
+    void add_counts(const ItemCounts& counts) {
+        samples += counts.samples;
+        rays += counts.rays;
+        dropped_samples += counts.dropped_samples;
+        for (const DroppedSample& d : counts.first_dropped)
+            if (first_dropped.size() < kFirstDropped) first_dropped.push_back(d);
+    }
     double build_seconds = 0;     // kernel build or cache load
     bool program_from_cache = false;
     uint64_t samples = 0;         // pixel samples (one camera + one light subpath each)
     uint64_t rays = 0;            // closest-hit and shadow rays traced
     uint64_t dropped_samples = 0; // samples left out for a non-finite value (drop_non_finite)
-    static constexpr size_t kFirstDropped = 5;
+    static constexpr size_t kFirstDropped = ItemCounts::kFirstDropped;
     std::vector<DroppedSample> first_dropped;  // the first few of them
     std::vector<std::string> defines;
     // Devices that failed during the render and left it, their passes going to the others:
     // "device name: what failed".
     std::vector<std::string> dropped_devices;
+    // Each device's part of a render on several (render_image): what it added to the image,
+    // what it rendered in vain (a run another device delivered first), and its busy time.
+    struct DeviceShare {
+        std::string name;
+        uint64_t samples = 0;
+        uint64_t wasted_samples = 0;
+        double busy_seconds = 0;
+    };
+    std::vector<DeviceShare> device_shares;
 };
 
 // One pass: one sample of every pixel (or, with pixel_stride k > 1, of every k-th pixel of every
@@ -118,29 +127,33 @@ public:
     // Renders samples [first_sample, first_sample + count) of every pixel into film.
     void render_passes(Film& film, uint32_t first_sample, int count);
     void render_pass(Film& film, const PassSpec& pass);
+    // Renders work items [first_item, first_item + item_count) of a pass and returns their
+    // values, not yet added to any film (add_to_film), and not counted in stats() but for the
+    // profile. cancelled, polled between launches: true abandons the items (the result is then
+    // incomplete and the caller discards it).
+    RenderedItems render_items(const PassSpec& pass, int first_item, int item_count,
+                               const std::function<bool()>& cancelled = {});
 
     const RenderStats& stats() const { return stats_; }
     // Zeroes samples, rays, dropped samples, profile and build time (the kernel flags and cache
     // flag stay).
     void reset_counters();
-    // Puts the counters back as they were (a failed pass's samples and rays do not count).
-    void restore_stats(const RenderStats& stats) { stats_ = stats; }
     const DeviceContext& device() const { return device_; }
     const DeviceScene& scene() const { return scene_; }
 
 private:
     // One launch of the render kernel over items [first_item, first_item + item_count) of a
     // pass, in four steps: its parameters, the launch and the read-back of its outputs, a
-    // smaller size for the following launches if this one took too long, and the host's
-    // accumulation of the outputs into the film.
-    void run_batch(Film& film, const PassSpec& pass, int first_item, int item_count);
+    // smaller size for the following launches if this one took too long, and the collection
+    // of the outputs into `out`.
+    void run_batch(RenderedItems& out, const PassSpec& pass, int first_item, int item_count);
     RenderParams batch_params(const PassSpec& pass, int first_item, int item_count) const;
     void launch_and_read_back(const RenderParams& params, int item_count);
     void limit_launch_size(double seconds, int item_count);
-    void accumulate(Film& film, const PassSpec& pass, int first_item, int item_count);
+    void collect(RenderedItems& out, const PassSpec& pass, int first_item, int item_count) const;
     bool sample_is_finite(int item) const;
     // Counts a sample with a non-finite value and leaves it out, or throws (drop_non_finite off).
-    void drop_sample(int item, int pixel, const PassSpec& pass);
+    void drop_sample(RenderedItems& out, int item, int pixel, const PassSpec& pass) const;
 
     DeviceContext& device_;
     const DeviceScene& scene_;

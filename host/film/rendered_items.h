@@ -1,0 +1,68 @@
+// What a device returns for a run of work items of one pass, before it is added to a film: each
+// item's camera value, and the t = 1 splats and strategy-image records in the order the kernel
+// wrote them. Adding is kept apart from rendering so that runs rendered anywhere (another device,
+// another MPI rank, out of order) are added in one fixed order: the film then does not depend on
+// who rendered what, bit for bit.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "film/film.h"
+
+namespace clbdpt {
+
+// A sample left out for a non-finite value: its pixel, sample index and the first strategy
+// (s, t) that gave one (-1, -1 if the kernel did not name one).
+struct DroppedSample {
+    int x = 0, y = 0;
+    uint32_t sample = 0;
+    int s = -1, t = -1;
+};
+
+// Samples rendered, rays traced, samples dropped, and the first few dropped.
+struct ItemCounts {
+    static constexpr size_t kFirstDropped = 5;
+    uint64_t samples = 0;
+    uint64_t rays = 0;
+    uint64_t dropped_samples = 0;
+    std::vector<DroppedSample> first_dropped;
+    void add(const ItemCounts& other) {
+        samples += other.samples;
+        rays += other.rays;
+        dropped_samples += other.dropped_samples;
+        for (const DroppedSample& d : other.first_dropped)
+            if (first_dropped.size() < kFirstDropped) first_dropped.push_back(d);
+    }
+};
+
+struct RenderedItems {
+    uint32_t sample_index = 0;  // the pass
+    int first_item = 0;
+    int item_count = 0;
+    int pixel_stride = 1;
+    // Per item: rgb. Items in dropped_items (sorted) are not added.
+    std::vector<float> camera;
+    std::vector<int> dropped_items;
+    // Light-image splats: pixel and rgb, in the order they are added.
+    struct Splat {
+        int pixel;
+        float r, g, b;
+    };
+    std::vector<Splat> splats;
+    // Strategy-image records (strategy images on): the strategy's slot and the record.
+    struct StrategySplat {
+        int slot;
+        Splat splat;
+    };
+    std::vector<StrategySplat> strategy_splats;
+    int strategy_slots = 0;   // 0: no strategy images
+    int strategy_stride = 0;  // max_depth + 3
+    ItemCounts counts;
+};
+
+// Adds the items' values to the film's sums, in the order a single device rendering the whole
+// pass at once would (items in order; each item's splats in slot order). Does not change spp.
+void add_to_film(Film& film, const RenderedItems& items);
+
+}  // namespace clbdpt

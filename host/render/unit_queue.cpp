@@ -1,0 +1,255 @@
+#include "render/unit_queue.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace clbdpt {
+
+namespace {
+
+// How long an idle worker waits before it looks again for a run worth taking over.
+constexpr auto kTakeOverPoll = std::chrono::milliseconds(20);
+
+}  // namespace
+
+UnitQueue::UnitQueue(const WorkUnits& units, Film* film, int passes, double budget_seconds, Clock::time_point start,
+                     int workers)
+    : units_(units),
+      film_(film),
+      timed_(budget_seconds > 0),
+      budget_(budget_seconds),
+      start_(start),
+      rate_(size_t(workers), 0.0),
+      shares_(size_t(workers)),
+      workers_in_render_(workers),
+      workers_running_(workers) {
+    // A time-bound render has at least one pass, however small the budget.
+    end_ = int64_t(timed_ ? 1 : std::max(passes, 0)) * units_.units_per_pass;
+}
+
+double UnitQueue::seconds_since_start() const {
+    return std::chrono::duration<double>(Clock::now() - start_).count();
+}
+
+std::optional<UnitQueue::Grab> UnitQueue::leave() {
+    --workers_in_render_;
+    changed_.notify_all();
+    return std::nullopt;
+}
+
+void UnitQueue::extend_end() {
+    if (stopped_) {
+        end_ = std::min(end_, units_.pass_end(next_));
+    } else if (timed_ && next_ >= end_ && seconds_since_start() < budget_) {
+        end_ += units_.units_per_pass;
+    }
+}
+
+int64_t UnitQueue::grab_size(int worker) const {
+    const double rate = rate_[size_t(worker)];
+    if (rate <= 0) return 1;  // not measured yet: one unit
+    int64_t n = std::max<int64_t>(1, std::llround(rate * kGrabSeconds / units_.unit_items));
+    if (!timed_ && workers_in_render_ > 1) {
+        // Towards the end, at most half of this worker's share of what is left (guided
+        // self-scheduling), so that the last runs are short on every worker.
+        double total = 0;
+        for (double r : rate_) total += r;
+        const double share = double(end_ - next_) * rate / total;
+        n = std::min(n, std::max<int64_t>(1, int64_t(std::ceil(share / 2))));
+    }
+    return std::min(n, end_ - next_);
+}
+
+std::optional<UnitQueue::Grab> UnitQueue::take_over(int worker, Clock::time_point now) {
+    const double rate = rate_[size_t(worker)];
+    if (rate <= 0) return std::nullopt;
+    Held* best = nullptr;
+    Clock::time_point best_end;
+    for (Held& h : held_) {
+        if (h.worker == worker || h.duplicated) continue;
+        // A holder past its expected end is assumed to need as long again as it has taken.
+        const Clock::time_point holder_end = h.expected_end > now ? h.expected_end : now + (now - h.start);
+        const auto mine = std::chrono::duration_cast<Clock::duration>(
+            std::chrono::duration<double>(double(units_.items_in(h.begin, h.end)) / rate));
+        if (now + mine < holder_end && (!best || holder_end > best_end)) {
+            best = &h;
+            best_end = holder_end;
+        }
+    }
+    if (!best) return std::nullopt;
+    best->duplicated = true;
+    return Grab{best->begin, best->end, true, best->done};
+}
+
+std::optional<UnitQueue::Grab> UnitQueue::take(int worker) {
+    std::unique_lock<std::mutex> lock(mutex_);
+    for (;;) {
+        if (aborted_) return leave();
+        const Clock::time_point now = Clock::now();
+        const double rate = rate_[size_t(worker)];
+        auto expected_end = [&](int64_t begin, int64_t end) {
+            if (rate <= 0) return Clock::time_point::max();
+            return now + std::chrono::duration_cast<Clock::duration>(
+                             std::chrono::duration<double>(double(units_.items_in(begin, end)) / rate));
+        };
+        if (!given_back_.empty()) {
+            Held h = given_back_.back();
+            given_back_.pop_back();
+            h.worker = worker;
+            h.start = now;
+            h.expected_end = expected_end(h.begin, h.end);
+            h.duplicated = false;
+            held_.push_back(h);
+            return Grab{h.begin, h.end, false, h.done};
+        }
+        extend_end();
+        if (next_ < end_) {
+            Held h;
+            h.begin = next_;
+            h.end = next_ + grab_size(worker);
+            h.worker = worker;
+            h.start = now;
+            h.expected_end = expected_end(h.begin, h.end);
+            h.done = std::make_shared<std::atomic<bool>>(false);
+            next_ = h.end;
+            held_.push_back(h);
+            return Grab{h.begin, h.end, false, h.done};
+        }
+        if (held_.empty()) return leave();
+        if (std::optional<Grab> copy = take_over(worker, now)) return copy;
+        changed_.wait_for(lock, kTakeOverPoll);
+    }
+}
+
+void UnitQueue::complete(int worker, const Grab& grab, std::vector<RenderedItems>&& results, double seconds) {
+    {
+        std::lock_guard<std::mutex> lock(mutex_);
+        const uint64_t items = uint64_t(units_.items_in(grab.begin, grab.end));
+        WorkerShare& share = shares_[size_t(worker)];
+        share.busy_seconds += seconds;
+        auto h = std::find_if(held_.begin(), held_.end(), [&](const Held& x) { return x.begin == grab.begin; });
+        if (h == held_.end()) {
+            // The other copy delivered first.
+            share.wasted_samples += items;
+            return;
+        }
+        if (seconds > 0) {
+            double& rate = rate_[size_t(worker)];
+            const double measured = double(items) / seconds;
+            rate = rate > 0 ? 0.5 * (rate + measured) : measured;
+        }
+        h->done->store(true);
+        held_.erase(h);
+        share.samples += items;
+        finished_[grab.begin] = Finished{grab.end, std::move(results)};
+        changed_.notify_all();
+    }
+    add_ready_results();
+}
+
+void UnitQueue::add_ready_results() {
+    std::lock_guard<std::mutex> adding(add_mutex_);
+    for (;;) {
+        Finished f;
+        {
+            std::lock_guard<std::mutex> lock(mutex_);
+            auto it = finished_.find(added_end_);
+            if (it == finished_.end()) return;
+            f = std::move(it->second);
+            finished_.erase(it);
+        }
+        ItemCounts counts;
+        for (const RenderedItems& r : f.results) {
+            add_to_film(*film_, r);
+            counts.add(r.counts);
+        }
+        std::lock_guard<std::mutex> lock(mutex_);
+        added_end_ = f.end;
+        counts_.add(counts);
+        film_->spp = units_.first_pass + int(added_end_ / units_.units_per_pass);
+        const bool on_pass_boundary = added_end_ % units_.units_per_pass == 0;
+        if (on_pass_boundary && first_pass_seconds_ == 0) first_pass_seconds_ = seconds_since_start();
+        if (on_pass_boundary && snapshot_requested_) {
+            snapshot_ = *film_;
+            snapshot_requested_ = false;
+        }
+        changed_.notify_all();
+    }
+}
+
+bool UnitQueue::fail(int worker, const Grab& grab) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    rate_[size_t(worker)] = 0;
+    if (workers_in_render_ <= 1) return false;
+    --workers_in_render_;
+    auto h = std::find_if(held_.begin(), held_.end(), [&](const Held& x) { return x.begin == grab.begin; });
+    if (h != held_.end()) {
+        if (grab.duplicate) {
+            h->duplicated = false;  // the original goes on
+        } else if (h->duplicated) {
+            h->worker = -1;  // the copy goes on
+        } else {
+            given_back_.push_back(*h);
+            held_.erase(h);
+        }
+    }
+    changed_.notify_all();
+    return true;
+}
+
+void UnitQueue::stop() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stopped_ = true;
+    changed_.notify_all();
+}
+
+void UnitQueue::abort() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    aborted_ = true;
+    changed_.notify_all();
+}
+
+void UnitQueue::request_snapshot() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    snapshot_requested_ = true;
+}
+
+std::optional<Film> UnitQueue::take_snapshot() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    std::optional<Film> out = std::move(snapshot_);
+    snapshot_.reset();
+    return out;
+}
+
+bool UnitQueue::wait_finished(std::chrono::milliseconds period) {
+    std::unique_lock<std::mutex> lock(mutex_);
+    return changed_.wait_for(lock, period, [&] { return workers_running_ == 0; });
+}
+
+void UnitQueue::worker_exited() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    --workers_running_;
+    changed_.notify_all();
+}
+
+int UnitQueue::passes_done() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return int(added_end_ / units_.units_per_pass);
+}
+
+std::vector<UnitQueue::WorkerShare> UnitQueue::shares() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return shares_;
+}
+
+ItemCounts UnitQueue::counts() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return counts_;
+}
+
+double UnitQueue::first_pass_seconds() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return first_pass_seconds_;
+}
+
+}  // namespace clbdpt
