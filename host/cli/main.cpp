@@ -16,6 +16,7 @@
 #include "device/opencl.h"
 #include "film/checkpoint.h"
 #include "film/image_io.h"
+#include "mpi/cluster.h"
 #include "render/aov.h"
 #include "render/automatic_view.h"
 #include "render/device_scene.h"
@@ -64,6 +65,7 @@ struct RenderArgs {
     std::string checkpoint;         // --checkpoint FILE
     double checkpoint_every = 60;   // seconds
     std::string resume;             // --resume FILE
+    std::string debug_exit_process; // hidden: "R:N", MPI process R ends abruptly after N runs
 };
 
 // Applies the command line's camera overrides. Where the scene's camera was automatic and only
@@ -253,8 +255,13 @@ Checkpoint read_checkpoint_to_resume(const std::string& path, const CheckpointIn
     return c;
 }
 
-int run_render(const RenderArgs& args) {
+// Under mpirun (mpi/cluster.h) every process runs this: the leader (process 0) as a whole render
+// whose work units also go to the other processes' devices; the others load the scene, build
+// their kernels for the leader's plan and render what it sends them, writing and printing
+// nothing unless they fail.
+int run_render(const RenderArgs& args, Cluster& cluster) {
     install_interrupt_handlers();
+    const bool leader = cluster.leader();
     LoadOptions load_options;
     load_options.default_light = !args.no_default_light;
     using Clock = std::chrono::steady_clock;
@@ -263,14 +270,16 @@ int run_render(const RenderArgs& args) {
     Scene scene = load_scene(args.scene, load_options);
     const double load_seconds = seconds_since(start);
     apply_camera_overrides(args, &scene);
-    for (const std::string& w : scene.warnings) std::fprintf(stderr, "clbdpt: warning: %s\n", w.c_str());
+    if (leader)
+        for (const std::string& w : scene.warnings) std::fprintf(stderr, "clbdpt: warning: %s\n", w.c_str());
 
     const std::string output = args.output.empty() ? default_output(args.scene) : args.output;
     if (!is_supported_output(output))
         throw Error("unsupported output format '" + output + "' (use .exr, .png, .jpg or .tif)");
     // Every file the render will write, checked before it starts.
-    for (const std::string& path : {output, args.stats, args.checkpoint.empty() ? args.resume : args.checkpoint})
-        if (!path.empty()) check_can_write(path);
+    if (leader)
+        for (const std::string& path : {output, args.stats, args.checkpoint.empty() ? args.resume : args.checkpoint})
+            if (!path.empty()) check_can_write(path);
     const int width = args.width > 0 ? args.width : scene.width;
     const int height = args.height > 0 ? args.height : scene.height;
     check_film_fits_in_memory(width, height, args.strategy_images.empty() ? 0 : (args.max_depth >= 0 ? args.max_depth : scene.render.max_depth));
@@ -349,7 +358,7 @@ int run_render(const RenderArgs& args) {
         checkpoint_info.settings = image_settings(args, options);
     }
     std::unique_ptr<Checkpoint> resumed;
-    if (!args.resume.empty()) {
+    if (!args.resume.empty() && leader) {
         resumed = std::make_unique<Checkpoint>(
             read_checkpoint_to_resume(args.resume, checkpoint_info, options, width, height));
         // The passes go on with the strategy mix they were rendered with (no pilot).
@@ -359,6 +368,7 @@ int run_render(const RenderArgs& args) {
     }
 
     if (aov >= 0) {
+        if (!leader) return 0;  // a debug image: the leader renders it alone
         std::vector<float> rgb = render_aov(device, ds, aov);
         meta.strings.push_back({"clbdpt:aov", args.aov});
         write_image(output, width, height, rgb, meta);
@@ -377,8 +387,15 @@ int run_render(const RenderArgs& args) {
     StrategyPilot pilot;
     const std::string mix_note =
         resumed ? "as in checkpoint '" + args.resume + "' (" + std::to_string(resumed->film.spp) + " spp resumed)"
-        : automatic && !mix_by_hand ? choose_strategy_mix(device, ds, &options, &pilot, &pilot_stats, &renderers)
-                                    : "";
+        : automatic && !mix_by_hand && leader
+            ? choose_strategy_mix(device, ds, &options, &pilot, &pilot_stats, &renderers)
+            : "";
+    // Every process renders with the leader's integrator and strategy mix.
+    RenderPlan plan{int(options.integrator), options.light_subpaths, options.inner_connections ? 1 : 0};
+    cluster.share_plan(&plan);
+    options.integrator = Integrator(plan.integrator);
+    options.light_subpaths = plan.light_subpaths;
+    options.inner_connections = plan.inner_connections != 0;
     const bool run_pilot = pilot.seconds > 0;
     int failing_device = -1, fail_after = -1;
     if (!args.debug_fail_device.empty() &&
@@ -399,6 +416,21 @@ int run_render(const RenderArgs& args) {
             std::fprintf(stderr, "clbdpt: kernel flags:%s\nclbdpt: kernel for %s %s in %.2f s\n", flags.c_str(),
                          d->entry().name.c_str(), rs.program_from_cache ? "loaded from cache" : "built", rs.build_seconds);
         }
+    }
+    if (!leader) {
+        cluster.serve(renderer_list, scene_fingerprint(ds));
+        return 0;
+    }
+    std::vector<std::unique_ptr<UnitWorker>> remote_devices;
+    std::vector<UnitWorker*> remote_list;
+    if (cluster.size() > 1) {
+        remote_devices = cluster.connect_remote_devices(scene_fingerprint(ds), width, height);
+        for (auto& r : remote_devices) {
+            remote_list.push_back(r.get());
+            device_names += " + " + r->name();
+        }
+        for (auto& entry : meta.strings)
+            if (entry.first == "clbdpt:device") entry.second = device_names;
     }
     checkpoint_info.integrator = int(options.integrator);
     checkpoint_info.light_subpaths = options.light_subpaths;
@@ -424,7 +456,8 @@ int run_render(const RenderArgs& args) {
     };
     RenderStats st;
     const double seconds_before_passes = seconds_since(start) - pilot.seconds;
-    Film film = render_image(renderer_list, options, &st, schedule);
+    Film film = render_image(renderer_list, options, &st, schedule, remote_list);
+    cluster.release_remote_devices();
     const int interrupted_by = interrupt_signal();
     if (interrupted_by != 0 && film.spp == 0) {
         bar.finish();
@@ -504,8 +537,16 @@ int run_render(const RenderArgs& args) {
         j["kernel_from_cache"] = st.program_from_cache;
         j["kernel_defines"] = st.defines;
         j["device"] = device_names;
-        j["devices"] = entries.size();
+        j["devices"] = entries.size() + remote_devices.size();
+        j["processes"] = cluster.size();
         j["dropped_devices"] = st.dropped_devices;
+        for (const RenderStats::DeviceShare& d : st.device_shares)
+            j["device_shares"].push_back({{"device", d.name},
+                                          {"samples", d.samples},
+                                          {"share", st.samples ? double(d.samples) / double(st.samples) : 0.0},
+                                          {"samples_per_second", st.seconds > 0 ? double(d.samples) / st.seconds : 0.0},
+                                          {"busy_seconds", d.busy_seconds},
+                                          {"wasted_samples", d.wasted_samples}});
         j["triangles"] = ds.triangles.size();
         j["load_seconds"] = load_seconds;
         j["device_scene_seconds"] = device_scene_seconds;
@@ -546,6 +587,15 @@ int run_render(const RenderArgs& args) {
                      strategy_mix.c_str(), film.spp, width, height, st.seconds, sps * 1e-6, rps * 1e-6,
                      st.program_from_cache ? "cached" : "build", st.build_seconds, output.c_str());
         if (!mix_note.empty()) std::fprintf(stderr, "clbdpt: strategy mix %s\n", mix_note.c_str());
+        if (st.device_shares.size() > 1)
+            for (const RenderStats::DeviceShare& d : st.device_shares)
+                std::fprintf(stderr, "clbdpt: %s: %.1f%% of the samples, %.3f M samples/s%s\n", d.name.c_str(),
+                             st.samples ? 100.0 * double(d.samples) / double(st.samples) : 0.0,
+                             st.seconds > 0 ? 1e-6 * double(d.samples) / st.seconds : 0.0,
+                             d.wasted_samples ? (", " + std::to_string(d.wasted_samples) +
+                                                 " rendered twice (taken over at the end)")
+                                                    .c_str()
+                                              : "");
     }
     if (st.dropped_samples > 0) {
         std::string first;
@@ -570,6 +620,7 @@ int run_render(const RenderArgs& args) {
 
 int main(int argc, char** argv) {
     using namespace clbdpt;
+    Cluster cluster(&argc, &argv);
     CLI::App app{"clbdpt: bidirectional path tracing in OpenCL kernels"};
     app.require_subcommand(1);
     app.set_version_flag("--version", "clbdpt 0.1");
@@ -643,6 +694,8 @@ int main(int argc, char** argv) {
     // Tests only: device K's launches fail after N launches; work items per launch at most.
     render->add_option("--debug-fail-device", args.debug_fail_device)->group("");
     render->add_option("--batch-items", args.batch_items)->group("")->check(CLI::PositiveNumber);
+    // Tests only: under mpirun, process R ends abruptly after rendering N runs.
+    render->add_option("--debug-exit-process", args.debug_exit_process)->group("");
 
     try {
         app.parse(argc, argv);
@@ -651,7 +704,12 @@ int main(int argc, char** argv) {
     }
     try {
         if (app.got_subcommand("devices")) return run_devices();
-        return run_render(args);
+        int exit_rank = -1, exit_after = -1;
+        if (!args.debug_exit_process.empty() &&
+            std::sscanf(args.debug_exit_process.c_str(), "%d:%d", &exit_rank, &exit_after) != 2)
+            throw Error("--debug-exit-process takes R:N");
+        if (exit_rank == cluster.rank()) cluster.debug_exit_after_runs = exit_after;
+        return run_render(args, cluster);
     } catch (const Error& e) {
         std::fprintf(stderr, "clbdpt: error: %s\n", e.what());
     } catch (const cl::Error& e) {
@@ -661,5 +719,7 @@ int main(int argc, char** argv) {
     } catch (const std::exception& e) {
         std::fprintf(stderr, "clbdpt: error: %s\n", e.what());
     }
+    // Under mpirun a failing process ends the others (which may be waiting for it).
+    if (cluster.size() > 1) cluster.abort(1);
     return 1;
 }

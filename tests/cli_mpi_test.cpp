@@ -1,0 +1,104 @@
+// `mpirun -n N clbdpt render ...` (mpi/cluster.h), run here with Open MPI on this machine's one
+// node (--oversubscribe: more processes than cores). Every process renders on PoCL; the leader
+// writes the image, which must equal a single process's bit for bit, also across a checkpoint
+// written by one number of processes and resumed by another. A process that dies ends the job
+// with an error instead of a hang. Only in builds with MPI (the README's test command installs
+// it, so CI runs these).
+#ifdef CLBDPT_HAS_MPI
+
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "cli_test_util.h"
+#include "film/image_io.h"
+
+namespace {
+
+using namespace clbdpt_cli_test;
+
+// Root may run mpirun here (containers, CI); PoCL on one thread per process keeps three
+// processes on two cores fair. `timeout` turns a hang into a failure.
+std::string mpirun(int processes) {
+    return "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1 "
+           "POCL_MAX_PTHREAD_COUNT=1 timeout 300 mpirun --oversubscribe -n " +
+           std::to_string(processes) + " ";
+}
+
+const std::string kRender = "render " + std::string(CLBDPT_SCENES_DIR) +
+                            "/cornell-box/cornell-box.json --integrator bdpt --width 80 --height 64";
+
+void expect_same_image(const std::string& a_path, const std::string& b_path) {
+    int w = 0, h = 0, w2 = 0, h2 = 0;
+    const std::vector<float> a = clbdpt::read_image_rgb(a_path, &w, &h);
+    const std::vector<float> b = clbdpt::read_image_rgb(b_path, &w2, &h2);
+    ASSERT_EQ(a.size(), b.size());
+    ASSERT_FALSE(a.empty());
+    EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(float)), 0) << a_path << " differs from " << b_path;
+}
+
+nlohmann::json read_json(const std::string& path) {
+    std::ifstream in(path);
+    return nlohmann::json::parse(in);
+}
+
+TEST_F(CliTest, MpiProcessesRenderTheSingleProcessImage) {
+    CommandResult one = run(kRender + " --spp 5 -o " + out("one.exr"));
+    ASSERT_EQ(one.status, 0) << one.output;
+    for (int processes : {2, 3}) {
+        const std::string image = out("mpi" + std::to_string(processes) + ".exr");
+        const std::string stats = out("mpi" + std::to_string(processes) + ".json");
+        CommandResult r = run(kRender + " --spp 5 -o " + image + " --stats " + stats, mpirun(processes));
+        ASSERT_EQ(r.status, 0) << r.output;
+        expect_same_image(out("one.exr"), image);
+        const nlohmann::json j = read_json(stats);
+        EXPECT_EQ(j["processes"], processes);
+        ASSERT_EQ(j["device_shares"].size(), size_t(processes)) << j.dump(2);
+        uint64_t samples = 0;
+        for (const nlohmann::json& d : j["device_shares"]) samples += d["samples"].get<uint64_t>();
+        EXPECT_EQ(samples, 5u * 80 * 64);
+        // One summary, from the leader.
+        size_t lines = 0;
+        for (size_t at = 0; (at = r.output.find(" spp 80x64 in ", at)) != std::string::npos; ++at) ++lines;
+        EXPECT_EQ(lines, 1u) << r.output;
+    }
+}
+
+TEST_F(CliTest, MpiCheckpointResumesUnderAnotherProcessCount) {
+    CommandResult first = run(kRender + " --spp 3 -o " + out("a.exr") + " --checkpoint " + out("a.ck"), mpirun(2));
+    ASSERT_EQ(first.status, 0) << first.output;
+    CommandResult resumed = run(kRender + " --spp 7 -o " + out("b.exr") + " --resume " + out("a.ck") + " --stats " +
+                                    out("b.json"),
+                                mpirun(3));
+    ASSERT_EQ(resumed.status, 0) << resumed.output;
+    EXPECT_EQ(read_json(out("b.json"))["resumed_spp"], 3);
+    CommandResult whole = run(kRender + " --spp 7 -o " + out("c.exr"));
+    ASSERT_EQ(whole.status, 0) << whole.output;
+    expect_same_image(out("b.exr"), out("c.exr"));
+}
+
+// Process 1 ends abruptly after its first run (as if its machine went down): mpirun ends the
+// job with a non-zero status and its own message, within the timeout, and no image is written.
+TEST_F(CliTest, MpiProcessThatDiesFailsTheRun) {
+    CommandResult r = run(kRender + " --spp 50 -o " + out("x.exr") + " --debug-exit-process 1:1", mpirun(2));
+    EXPECT_NE(r.status, 0) << r.output;
+    EXPECT_NE(r.status, 124) << "timed out: the job hung\n" << r.output;
+    EXPECT_NE(r.output.find("process 1 ends abruptly"), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(out("x.exr")));
+}
+
+// An error in one process (here the leader's: an output folder that does not exist) ends every
+// process with the error line, not a hang.
+TEST_F(CliTest, MpiErrorInOneProcessEndsTheJob) {
+    CommandResult r = run(kRender + " --spp 2 -o " + out("missing/x.exr"), mpirun(2));
+    EXPECT_NE(r.status, 0) << r.output;
+    EXPECT_NE(r.status, 124) << "timed out: the job hung\n" << r.output;
+    EXPECT_NE(r.output.find("clbdpt: error: cannot write"), std::string::npos) << r.output;
+}
+
+}  // namespace
+
+#endif  // CLBDPT_HAS_MPI

@@ -1,0 +1,91 @@
+// The bytes that carry rendered items between MPI processes (mpi/items_message.h): a round
+// trip gives back every value bit for bit, a remote failure comes back as its error, and a
+// truncated or padded message is refused rather than read past its end.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <limits>
+
+#include "mpi/items_message.h"
+#include "util/error.h"
+
+namespace clbdpt {
+namespace {
+
+RenderedItems sample_items() {
+    RenderedItems r;
+    r.sample_index = 7;
+    r.first_item = 4096;
+    r.item_count = 3;
+    r.camera = {1.0f, -0.0f, std::numeric_limits<float>::denorm_min(), 3e38f, 0.1f, 2.5f, 0, 1, 2};
+    r.dropped_items = {1};
+    r.splats = {{5, 0.25f, 0.5f, 1e-30f}, {9, 1, 2, 3}};
+    r.strategy_slots = 42;
+    r.strategy_stride = 7;
+    r.strategy_splats = {{3, {5, 0.5f, 0.25f, 0.125f}}};
+    r.counts.samples = 3;
+    r.counts.rays = 1234567890123ull;
+    r.counts.dropped_samples = 1;
+    DroppedSample d;
+    d.x = 1;
+    d.y = 2;
+    d.sample = 7;
+    d.s = 2;
+    d.t = 3;
+    r.counts.first_dropped = {d};
+    return r;
+}
+
+TEST(ItemsMessage, RoundTripIsExact) {
+    const std::vector<RenderedItems> sent = {sample_items(), RenderedItems()};
+    const std::vector<RenderedItems> got = decode_results(encode_results(sent));
+    ASSERT_EQ(got.size(), 2u);
+    const RenderedItems &a = sent[0], &b = got[0];
+    EXPECT_EQ(b.sample_index, a.sample_index);
+    EXPECT_EQ(b.first_item, a.first_item);
+    EXPECT_EQ(b.item_count, a.item_count);
+    ASSERT_EQ(b.camera.size(), a.camera.size());
+    EXPECT_EQ(std::memcmp(b.camera.data(), a.camera.data(), a.camera.size() * sizeof(float)), 0);
+    EXPECT_EQ(b.dropped_items, a.dropped_items);
+    ASSERT_EQ(b.splats.size(), 2u);
+    EXPECT_EQ(std::memcmp(b.splats.data(), a.splats.data(), 2 * sizeof(RenderedItems::Splat)), 0);
+    ASSERT_EQ(b.strategy_splats.size(), 1u);
+    EXPECT_EQ(b.strategy_splats[0].slot, 3);
+    EXPECT_EQ(b.strategy_slots, 42);
+    EXPECT_EQ(b.strategy_stride, 7);
+    EXPECT_EQ(b.counts.rays, a.counts.rays);
+    ASSERT_EQ(b.counts.first_dropped.size(), 1u);
+    EXPECT_EQ(b.counts.first_dropped[0].t, 3);
+    EXPECT_EQ(got[1].item_count, 0);
+
+    const std::vector<ItemRun> runs = {{3, 0, 4096}, {4, 8192, 100}};
+    const std::vector<ItemRun> back = decode_runs(encode_runs(runs));
+    ASSERT_EQ(back.size(), 2u);
+    EXPECT_EQ(back[1].pass, 4u);
+    EXPECT_EQ(back[1].first_item, 8192);
+    EXPECT_EQ(back[1].item_count, 100);
+    EXPECT_TRUE(decode_runs(encode_runs({})).empty());
+}
+
+TEST(ItemsMessage, FailureAndDamageAreErrors) {
+    try {
+        decode_results(encode_failure("pthread: launch failed"));
+        FAIL() << "a failure message must throw";
+    } catch (const Error& e) {
+        EXPECT_STREQ(e.what(), "pthread: launch failed");
+    }
+    const std::vector<uint8_t> whole = encode_results({sample_items()});
+    for (size_t cut : {size_t(0), size_t(1), whole.size() / 2, whole.size() - 1}) {
+        const std::vector<uint8_t> truncated(whole.begin(), whole.begin() + long(cut));
+        EXPECT_THROW(decode_results(truncated), Error) << cut;
+    }
+    std::vector<uint8_t> padded = whole;
+    padded.push_back(0);
+    EXPECT_THROW(decode_results(padded), Error);
+    std::vector<uint8_t> runs = encode_runs({{1, 2, 3}});
+    runs.pop_back();
+    EXPECT_THROW(decode_runs(runs), Error);
+}
+
+}  // namespace
+}  // namespace clbdpt
