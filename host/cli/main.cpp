@@ -66,6 +66,7 @@ struct RenderArgs {
     double checkpoint_every = 60;   // seconds
     std::string resume;             // --resume FILE
     std::string debug_exit_process; // hidden: "R:N", MPI process R ends abruptly after N runs
+    std::string debug_slow_device;  // hidden: "K:F", device K runs F times slower (benchmarks)
 };
 
 // Applies the command line's camera overrides. Where the scene's camera was automatic and only
@@ -401,9 +402,15 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
     if (!args.debug_fail_device.empty() &&
         std::sscanf(args.debug_fail_device.c_str(), "%d:%d", &failing_device, &fail_after) != 2)
         throw Error("--debug-fail-device takes K:N");
+    int slow_device = -1;
+    double slowdown = 1;
+    if (!args.debug_slow_device.empty() &&
+        (std::sscanf(args.debug_slow_device.c_str(), "%d:%lf", &slow_device, &slowdown) != 2 || !(slowdown >= 1)))
+        throw Error("--debug-slow-device takes K:F with F >= 1");
     for (size_t i = renderers.size(); i < devices.size(); ++i) {
         RenderOptions device_options = options;
         if (int(i) == failing_device) device_options.debug_fail_after_launches = fail_after;
+        if (int(i) == slow_device) device_options.debug_slowdown = slowdown;
         renderers.push_back(std::make_unique<Renderer>(*devices[i], ds, device_options));
     }
     for (size_t i = 0; i < devices.size(); ++i) {
@@ -696,6 +703,8 @@ int main(int argc, char** argv) {
     render->add_option("--batch-items", args.batch_items)->group("")->check(CLI::PositiveNumber);
     // Tests only: under mpirun, process R ends abruptly after rendering N runs.
     render->add_option("--debug-exit-process", args.debug_exit_process)->group("");
+    // Benchmarks only: device K runs F times slower (it waits after each launch).
+    render->add_option("--debug-slow-device", args.debug_slow_device)->group("");
 
     try {
         app.parse(argc, argv);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <thread>
 
 #include "util/error.h"
 
@@ -90,11 +91,17 @@ Renderer::Renderer(DeviceContext& device, const DeviceScene& scene, const Render
         if (local_size_ > 0) {
             // PoCL compiles the work-group function of a kernel at its first launch: do that
             // now, with an empty launch, so it counts as build time and not as render time.
+            // The launch is as wide as the widest this renderer makes: PoCL loads a function
+            // for the width of its first launch and reuses it only for launches no wider, so
+            // launches of varying widths would each load another (and devices doing that at
+            // once trip an assertion in PoCL's cache of them, observed with two "basic"
+            // devices, pocl 3.1).
             const auto warm_start = std::chrono::steady_clock::now();
-            RenderParams empty{};
+            RenderParams empty{};  // pixel_count 0: every work item returns at once
             kernel_.setArg(kParamsArg, empty);
-            device.queue().enqueueNDRangeKernel(kernel_, cl::NullRange, cl::NDRange(size_t(local_size_)),
-                                                cl::NDRange(size_t(local_size_)));
+            const size_t local = size_t(local_size_);
+            const size_t widest = (size_t(batch_items_) + local - 1) / local * local;
+            device.queue().enqueueNDRangeKernel(kernel_, cl::NullRange, cl::NDRange(widest), cl::NDRange(local));
             device.queue().finish();
             stats_.build_seconds +=
                 std::chrono::duration<double>(std::chrono::steady_clock::now() - warm_start).count();
@@ -259,7 +266,10 @@ void Renderer::run_batch(RenderedItems& out, const PassSpec& pass, int first_ite
     const auto launch_start = std::chrono::steady_clock::now();
     launch_and_read_back(batch_params(pass, first_item, item_count), item_count);
     const auto accumulate_start = std::chrono::steady_clock::now();
-    limit_launch_size(std::chrono::duration<double>(accumulate_start - launch_start).count(), item_count);
+    const double launch_seconds = std::chrono::duration<double>(accumulate_start - launch_start).count();
+    limit_launch_size(launch_seconds, item_count);
+    if (options_.debug_slowdown > 1)
+        std::this_thread::sleep_for(std::chrono::duration<double>((options_.debug_slowdown - 1) * launch_seconds));
     collect(out, pass, first_item, item_count);
     stats_.profile.accumulate_seconds +=
         std::chrono::duration<double>(std::chrono::steady_clock::now() - accumulate_start).count();

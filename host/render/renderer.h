@@ -44,6 +44,9 @@ struct RenderOptions {
     // Tests only: launches after which this renderer's launches fail, as a driver's would
     // (-1: never).
     int debug_fail_after_launches = -1;
+    // Benchmarks only: this renderer waits (factor - 1) times each launch's duration after it,
+    // as a device `factor` times slower would take, leaving its cores to the others (> 1: on).
+    double debug_slowdown = 1;
     // Called now and then from the rendering thread: passes done, passes planned (0 if
     // time-bound), seconds so far.
     std::function<void(int, int, double)> progress;

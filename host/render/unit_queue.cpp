@@ -57,6 +57,9 @@ int64_t UnitQueue::grab_size(int worker) const {
         const double share = double(end_ - next_) * rate / total;
         n = std::min(n, std::max<int64_t>(1, int64_t(std::ceil(share / 2))));
     }
+    // A run of a pass or more ends on a pass boundary: whole passes launch as whole passes.
+    const int64_t whole_passes_end = (next_ + n) / units_.units_per_pass * units_.units_per_pass;
+    if (n >= units_.units_per_pass && whole_passes_end > next_) n = whole_passes_end - next_;
     return std::min(n, end_ - next_);
 }
 
