@@ -163,32 +163,35 @@ void Cluster::serve(const std::vector<Renderer*>& renderers, uint64_t scene_fing
     }
     send_bytes(hello, 0, kHelloTag);
     std::atomic<int> runs_done{0};
+    // Renders what the leader sends device d until it says stop. A device that fails answers
+    // with its error (the leader drops it and sends it nothing more but the stop).
     auto serve_device = [&](size_t d) {
         DeviceWorker device(*renderers[d]);
-        bool failed = false;
         std::string failure;
-        for (;;) {
-            const std::vector<ItemRun> runs = decode_runs(receive_bytes(0, kRunsTag + int(d)));
-            if (runs.empty()) break;  // the render is over
-            if (failed) {
-                // The leader dropped this device; it sends nothing more but the stop.
-                send_bytes(encode_failure(failure), 0, kResultsTag + int(d));
-                continue;
+        try {
+            for (;;) {
+                const std::vector<ItemRun> runs = decode_runs(receive_bytes(0, kRunsTag + int(d)));
+                if (runs.empty()) break;  // the render is over
+                std::vector<uint8_t> answer;
+                if (failure.empty()) {
+                    try {
+                        answer = encode_results(device.render(runs, {}));
+                    } catch (const std::exception& e) {
+                        failure = device.name() + ": " + e.what();
+                    }
+                }
+                if (!failure.empty()) answer = encode_failure(failure);
+                if (debug_exit_after_runs >= 0 && ++runs_done > debug_exit_after_runs) {
+                    std::fprintf(stderr, "clbdpt: process %d ends abruptly (--debug-exit-process)\n", rank_);
+                    std::fflush(stderr);
+                    ::_exit(3);
+                }
+                send_bytes(answer, 0, kResultsTag + int(d));
             }
-            std::vector<uint8_t> answer;
-            try {
-                answer = encode_results(device.render(runs, {}));
-            } catch (const std::exception& e) {
-                failed = true;
-                failure = device.name() + ": " + e.what();
-                answer = encode_failure(failure);
-            }
-            if (debug_exit_after_runs >= 0 && ++runs_done > debug_exit_after_runs) {
-                std::fprintf(stderr, "clbdpt: process %d ends abruptly (--debug-exit-process)\n", rank_);
-                std::fflush(stderr);
-                ::_exit(3);
-            }
-            send_bytes(answer, 0, kResultsTag + int(d));
+        } catch (const std::exception& e) {
+            // A damaged message, or no memory for one: this process cannot go on.
+            std::fprintf(stderr, "clbdpt: error: process %d: %s\n", rank_, e.what());
+            abort(1);
         }
     };
     std::vector<std::thread> threads;

@@ -268,11 +268,11 @@ void Renderer::run_batch(RenderedItems& out, const PassSpec& pass, int first_ite
     const auto accumulate_start = std::chrono::steady_clock::now();
     const double launch_seconds = std::chrono::duration<double>(accumulate_start - launch_start).count();
     limit_launch_size(launch_seconds, item_count);
-    if (options_.debug_slowdown > 1)
-        std::this_thread::sleep_for(std::chrono::duration<double>((options_.debug_slowdown - 1) * launch_seconds));
     collect(out, pass, first_item, item_count);
     stats_.profile.accumulate_seconds +=
         std::chrono::duration<double>(std::chrono::steady_clock::now() - accumulate_start).count();
+    if (options_.debug_slowdown > 1)
+        std::this_thread::sleep_for(std::chrono::duration<double>((options_.debug_slowdown - 1) * launch_seconds));
 }
 
 void Renderer::limit_launch_size(double seconds, int item_count) {
