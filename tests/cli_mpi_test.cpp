@@ -31,15 +31,6 @@ std::string mpirun(int processes) {
 const std::string kRender = "render " + std::string(CLBDPT_SCENES_DIR) +
                             "/cornell-box/cornell-box.json --integrator bdpt --width 80 --height 64";
 
-void expect_same_image(const std::string& a_path, const std::string& b_path) {
-    int w = 0, h = 0, w2 = 0, h2 = 0;
-    const std::vector<float> a = clbdpt::read_image_rgb(a_path, &w, &h);
-    const std::vector<float> b = clbdpt::read_image_rgb(b_path, &w2, &h2);
-    ASSERT_EQ(a.size(), b.size());
-    ASSERT_FALSE(a.empty());
-    EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(float)), 0) << a_path << " differs from " << b_path;
-}
-
 nlohmann::json read_json(const std::string& path) {
     std::ifstream in(path);
     return nlohmann::json::parse(in);

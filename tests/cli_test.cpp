@@ -227,16 +227,6 @@ TEST_F(CliTest, AovRendersTheFirstHit) {
     EXPECT_TRUE(fs::exists(out("n.exr")));
 }
 
-// Exact equality of two images' floats (an EXR keeps them as rendered).
-void expect_same_image(const std::string& a_path, const std::string& b_path) {
-    int w = 0, h = 0, w2 = 0, h2 = 0;
-    const std::vector<float> a = clbdpt::read_image_rgb(a_path, &w, &h);
-    const std::vector<float> b = clbdpt::read_image_rgb(b_path, &w2, &h2);
-    ASSERT_EQ(a.size(), b.size());
-    ASSERT_FALSE(a.empty());
-    EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(float)), 0) << a_path << " differs from " << b_path;
-}
-
 // Two PoCL devices share one render: the work units split between them, and the image is one
 // device's bit for bit (results are added in unit order whoever rendered them).
 TEST_F(CliTest, TwoDevicesShareOneRender) {

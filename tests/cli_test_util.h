@@ -8,8 +8,12 @@
 
 #include <array>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <string>
+#include <vector>
+
+#include "film/image_io.h"
 
 namespace clbdpt_cli_test {
 
@@ -31,6 +35,16 @@ inline CommandResult run(const std::string& args, const std::string& env = "") {
     int st = pclose(pipe);
     r.status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
     return r;
+}
+
+// Exact equality of two images' floats (an EXR keeps them as rendered).
+inline void expect_same_image(const std::string& a_path, const std::string& b_path) {
+    int w = 0, h = 0, w2 = 0, h2 = 0;
+    const std::vector<float> a = clbdpt::read_image_rgb(a_path, &w, &h);
+    const std::vector<float> b = clbdpt::read_image_rgb(b_path, &w2, &h2);
+    ASSERT_EQ(a.size(), b.size());
+    ASSERT_FALSE(a.empty());
+    EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(float)), 0) << a_path << " differs from " << b_path;
 }
 
 inline std::string data(const std::string& name) { return std::string(CLBDPT_TEST_DATA_DIR) + "/" + name; }

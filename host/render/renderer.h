@@ -69,11 +69,7 @@ struct RenderStats {
         profile.kernel_seconds += other.profile.kernel_seconds;
         profile.transfer_seconds += other.profile.transfer_seconds;
         profile.accumulate_seconds += other.profile.accumulate_seconds;
-        samples += other.samples;
-        rays += other.rays;
-        dropped_samples += other.dropped_samples;
-        for (const DroppedSample& d : other.first_dropped)
-            if (first_dropped.size() < kFirstDropped) first_dropped.push_back(d);
+        add_counts(ItemCounts{other.samples, other.rays, other.dropped_samples, other.first_dropped});
         build_seconds += other.build_seconds;
     }
     void add_counts(const ItemCounts& counts) {
