@@ -285,6 +285,51 @@ TEST(Opencl, ProgramIsCachedOnDiskAndInProcess) {
     EXPECT_EQ(data, (std::vector<cl_int>{4, 5, 6, 7}));
 }
 
+// The cache stays within CLBDPT_CACHE_MAX_MB: writing a kernel removes the least recently used
+// binaries until the rest fit (never the new one), and a cache hit counts as a use.
+TEST(Opencl, CacheKeepsItsSizeLimitDroppingTheLeastRecentlyUsed) {
+    TempDir kernels;
+    TempDir cache;
+    kernels.write("kernels/tiny.cl", kTinyKernel);
+    ScopedEnv kernel_dir("CLBDPT_KERNEL_DIR", kernels.path().string());
+    ScopedEnv cache_dir("CLBDPT_CACHE_DIR", cache.path().string());
+    ScopedEnv cache_max("CLBDPT_CACHE_MAX_MB", "1");
+    const DeviceEntry entry = select_device("");
+
+    DeviceContext first(entry);
+    ASSERT_FALSE(first.program("kernels/tiny.cl", {"VALUE=1"}).from_cache);
+    fs::path tiny;
+    for (const auto& f : fs::directory_iterator(cache.path())) tiny = f.path();
+    ASSERT_FALSE(tiny.empty());
+    // Three older binaries of 400 KB: the oldest first; the tiny kernel's older still.
+    const auto now = fs::file_time_type::clock::now();
+    const char* names[] = {"oldest.bin", "older.bin", "old.bin"};
+    for (int k = 0; k < 3; ++k) {
+        cache.write(names[k], std::string(400 << 10, 'x'));
+        fs::last_write_time(cache.path() / names[k], now - std::chrono::hours(3 - k));
+    }
+    fs::last_write_time(tiny, now - std::chrono::hours(10));
+    // A hit makes the tiny kernel the most recently used.
+    DeviceContext second(entry);
+    ASSERT_TRUE(second.program("kernels/tiny.cl", {"VALUE=1"}).from_cache);
+    EXPECT_GT(fs::last_write_time(tiny), now - std::chrono::minutes(1));
+
+    // Writing another kernel brings the cache over 1 MiB: the oldest file goes, nothing else.
+    ASSERT_FALSE(second.program("kernels/tiny.cl", {"VALUE=2"}).from_cache);
+    EXPECT_FALSE(fs::exists(cache.path() / "oldest.bin"));
+    EXPECT_TRUE(fs::exists(cache.path() / "older.bin"));
+    EXPECT_TRUE(fs::exists(cache.path() / "old.bin"));
+    EXPECT_TRUE(fs::exists(tiny));
+    uint64_t total = 0;
+    int binaries = 0;
+    for (const auto& f : fs::directory_iterator(cache.path())) {
+        total += fs::file_size(f.path());
+        ++binaries;
+    }
+    EXPECT_EQ(binaries, 4);  // older, old, and the two tiny kernels
+    EXPECT_LE(total, uint64_t(1) << 20);
+}
+
 TEST(Opencl, CorruptCacheFileFallsBackToSource) {
     TempDir kernels;
     TempDir cache;

@@ -264,6 +264,59 @@ void write_cache_file(const fs::path& path, const std::vector<unsigned char>& da
     }
 }
 
+// The cache's size limit in bytes: CLBDPT_CACHE_MAX_MB, default 512 MiB (about 1400 render
+// kernels of ~370 KB); 0 means no limit. Every scene, integrator and depth builds a kernel of
+// its own, so without a limit the cache only grows (a developer's reached 744 MB).
+uint64_t cache_max_bytes() {
+    constexpr uint64_t kDefaultMiB = 512;
+    const std::string text = env_or_empty("CLBDPT_CACHE_MAX_MB");
+    char* end = nullptr;
+    const unsigned long long mib = text.empty() ? kDefaultMiB : std::strtoull(text.c_str(), &end, 10);
+    if (!text.empty() && (end == text.c_str() || *end)) return kDefaultMiB << 20;
+    return uint64_t(mib) << 20;
+}
+
+// Keeps the cache within cache_max_bytes(): removes the least recently used binaries (a hit
+// refreshes a file's time) until the rest fit, never `keep`, the one just written; and the
+// temporary files of writers that died more than an hour ago. Files that another process
+// removes first, or that cannot be removed, are passed over.
+void trim_cache(const fs::path& dir, const fs::path& keep) {
+    const uint64_t limit = cache_max_bytes();
+    struct Entry {
+        fs::path path;
+        fs::file_time_type used;
+        uint64_t bytes;
+    };
+    std::vector<Entry> binaries;
+    uint64_t total = 0;
+    std::error_code ec;
+    const auto stale = fs::file_time_type::clock::now() - std::chrono::hours(1);
+    for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+        const fs::path& path = it->path();
+        const auto used = fs::last_write_time(path, ec);
+        const uintmax_t bytes = fs::file_size(path, ec);
+        if (ec) {
+            ec.clear();
+            continue;
+        }
+        if (path.filename().string().find(".bin.tmp.") != std::string::npos) {
+            if (used < stale) fs::remove(path, ec);
+            ec.clear();
+        } else if (path.extension() == ".bin") {
+            binaries.push_back({path, used, uint64_t(bytes)});
+            total += bytes;
+        }
+    }
+    if (limit == 0 || total <= limit) return;
+    std::sort(binaries.begin(), binaries.end(), [](const Entry& a, const Entry& b) { return a.used < b.used; });
+    for (const Entry& e : binaries) {
+        if (total <= limit) break;
+        if (e.path == keep) continue;
+        if (fs::remove(e.path, ec) && !ec) total -= e.bytes;
+        ec.clear();
+    }
+}
+
 // The cache directory, created if needed; empty if caching is not possible.
 fs::path usable_cache_dir() {
     std::string dir = program_cache_dir();
@@ -479,6 +532,8 @@ const ProgramBuild& DeviceContext::program(const std::string& entry_file, const 
                 program.build(devices, options.c_str());
                 build.program = program;
                 build.from_cache = true;
+                std::error_code ignored;  // most recently used: the last to be trimmed
+                fs::last_write_time(cache_file, fs::file_time_type::clock::now(), ignored);
                 build.build_log = trimmed(program.getBuildInfo<CL_PROGRAM_BUILD_LOG>(entry_.device));
             } catch (const cl::Error&) {
                 std::error_code ignored;
@@ -499,7 +554,10 @@ const ProgramBuild& DeviceContext::program(const std::string& entry_file, const 
 
             if (!cache_file.empty()) {
                 std::vector<std::vector<unsigned char>> binaries = program.getInfo<CL_PROGRAM_BINARIES>();
-                if (binaries.size() == 1 && !binaries[0].empty()) write_cache_file(cache_file, binaries[0]);
+                if (binaries.size() == 1 && !binaries[0].empty()) {
+                    write_cache_file(cache_file, binaries[0]);
+                    trim_cache(cache_dir, cache_file);
+                }
             }
         }
     } catch (const cl::Error& e) {
