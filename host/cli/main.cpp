@@ -646,7 +646,8 @@ int main(int argc, char** argv) {
     render->add_option("--seed", args.seed, "Random seed (default: the scene's render.seed)");
     render->add_option("--device", args.device,
                        "Device index or name substring (default: first GPU, else first CPU); several separated "
-                       "by commas, or 'all', share the render");
+                       "by commas, or 'all', share the render by their measured speeds, the image the same bit for "
+                       "bit (under mpirun -n N, so do every process's devices)");
     render->add_option("--width", args.width, "Film width override")->check(CLI::Range(1, 32768));
     render->add_option("--height", args.height, "Film height override")->check(CLI::Range(1, 32768));
     render->add_option("--stats", args.stats, "Write a JSON summary (spp, seconds, samples/s, rays/s, ...)");
