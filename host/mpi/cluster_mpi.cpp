@@ -23,7 +23,9 @@ namespace {
 constexpr int kHelloTag = 1;
 constexpr int kRunsTag = 1000;     // + device index: runs to render, or none for "stop"
 constexpr int kResultsTag = 2000;  // + device index: what the device rendered
-constexpr auto kPoll = std::chrono::microseconds(200);
+// Measured with 2 processes on 2 cores (bdpt, medians of 3): 0.2 ms polls 94% of the sum of
+// the processes alone, 1 ms 96%, 3 ms 95% (the wait before each run starts grows).
+constexpr auto kPoll = std::chrono::microseconds(1000);
 
 bool started_by_mpirun() {
     return std::getenv("OMPI_COMM_WORLD_SIZE") != nullptr || std::getenv("PMI_SIZE") != nullptr;
