@@ -8,15 +8,13 @@
 
 #include <gtest/gtest.h>
 
-#include <unistd.h>
-
-#include <algorithm>
 #include <cstring>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
 
 #include "cli_test_util.h"
+#include "device/opencl.h"
 #include "film/image_io.h"
 
 namespace {
@@ -28,11 +26,8 @@ using namespace clbdpt_cli_test;
 // starts (clbdpt's own remedy, device/opencl.cpp, comes too late). The README's advice for that
 // case: describe the machine to hwloc, which every process then inherits.
 std::string hwloc_without_sysfs() {
-    if (fs::is_directory("/sys/devices/system/cpu")) return "";
-    const long cores = std::max(1L, ::sysconf(_SC_NPROCESSORS_ONLN));
-    const long long memory = static_cast<long long>(::sysconf(_SC_PHYS_PAGES)) * ::sysconf(_SC_PAGE_SIZE);
-    return "HWLOC_COMPONENTS=synthetic HWLOC_SYNTHETIC='numa:1(memory=" + std::to_string(memory) + ") core:" +
-           std::to_string(cores) + " pu:1' ";
+    const std::string topology = clbdpt::hwloc_topology_without_sysfs();
+    return topology.empty() ? "" : "HWLOC_COMPONENTS=synthetic HWLOC_SYNTHETIC='" + topology + "' ";
 }
 
 // Under scripts/sanitize.sh (AddressSanitizer): Open MPI's plugins keep allocations until exit

@@ -19,10 +19,10 @@ RenderedItems sample_items() {
     r.item_count = 3;
     r.camera = {1.0f, -0.0f, std::numeric_limits<float>::denorm_min(), 3e38f, 0.1f, 2.5f, 0, 1, 2};
     r.dropped_items = {1};
-    r.splats = {{5, 0.25f, 0.5f, 1e-30f}, {9, 1, 2, 3}};
+    r.splats = {{0.25f, 0.5f, 1e-30f, 5}, {1, 2, 3, 9}};
     r.strategy_slots = 42;
     r.strategy_stride = 7;
-    r.strategy_splats = {{3, {5, 0.5f, 0.25f, 0.125f}}};
+    r.strategy_splats = {{3, {0.5f, 0.25f, 0.125f, 5}}};
     r.counts.samples = 3;
     r.counts.rays = 1234567890123ull;
     r.counts.dropped_samples = 1;
@@ -48,7 +48,7 @@ TEST(ItemsMessage, RoundTripIsExact) {
     EXPECT_EQ(std::memcmp(b.camera.data(), a.camera.data(), a.camera.size() * sizeof(float)), 0);
     EXPECT_EQ(b.dropped_items, a.dropped_items);
     ASSERT_EQ(b.splats.size(), 2u);
-    EXPECT_EQ(std::memcmp(b.splats.data(), a.splats.data(), 2 * sizeof(RenderedItems::Splat)), 0);
+    EXPECT_EQ(std::memcmp(b.splats.data(), a.splats.data(), 2 * sizeof(SplatRecord)), 0);
     ASSERT_EQ(b.strategy_splats.size(), 1u);
     EXPECT_EQ(b.strategy_splats[0].slot, 3);
     EXPECT_EQ(b.strategy_slots, 42);

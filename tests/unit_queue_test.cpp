@@ -47,8 +47,8 @@ RenderedItems fake_items(uint32_t pass, int first, int count) {
         const uint32_t item = uint32_t(first + i);
         for (int c = 0; c < 3; ++c) r.camera[size_t(i) * 3 + c] = value(pass * 3 + uint32_t(c), item);
         for (uint32_t k = 0; k < hash(pass, item) % 3; ++k)
-            r.splats.push_back({int(hash(item, pass * 7 + k) % uint32_t(kWidth * kHeight)), value(item, pass + k),
-                                value(item + 1, pass), value(item + 2, pass)});
+            r.splats.push_back({value(item, pass + k), value(item + 1, pass), value(item + 2, pass),
+                                int(hash(item, pass * 7 + k) % uint32_t(kWidth * kHeight))});
     }
     r.counts.samples = uint64_t(count);
     r.counts.rays = uint64_t(count) * 2;

@@ -333,26 +333,26 @@ fs::path usable_cache_dir() {
     return dir;
 }
 
-// PoCL sizes its CPU device from hwloc's view of the machine, which hwloc reads from /sys.
-// Where /sys is not mounted (a bare chroot, some containers) hwloc finds no memory at all and
-// PoCL aborts the whole process ("Not enough memory to run on this device"). There, describe
-// the machine to hwloc as a synthetic topology of this many cores and this much memory, as
-// sysconf reports them. Must run before the first OpenCL call; a user's own HWLOC_SYNTHETIC
-// or HWLOC_COMPONENTS wins.
+// Must run before the first OpenCL call; a user's own HWLOC_SYNTHETIC or HWLOC_COMPONENTS
+// wins.
 void describe_machine_to_hwloc_without_sysfs() {
-    std::error_code ec;
-    if (std::filesystem::is_directory("/sys/devices/system/cpu", ec)) return;
     if (std::getenv("HWLOC_SYNTHETIC") || std::getenv("HWLOC_COMPONENTS")) return;
-    const long cores = std::max(1L, ::sysconf(_SC_NPROCESSORS_ONLN));
-    const long long memory = static_cast<long long>(::sysconf(_SC_PHYS_PAGES)) * ::sysconf(_SC_PAGE_SIZE);
-    if (memory <= 0) return;
-    const std::string topology =
-        "numa:1(memory=" + std::to_string(memory) + ") core:" + std::to_string(cores) + " pu:1";
+    const std::string topology = hwloc_topology_without_sysfs();
+    if (topology.empty()) return;
     ::setenv("HWLOC_COMPONENTS", "synthetic", 0);
     ::setenv("HWLOC_SYNTHETIC", topology.c_str(), 0);
 }
 
 }  // namespace
+
+std::string hwloc_topology_without_sysfs() {
+    std::error_code ec;
+    if (std::filesystem::is_directory("/sys/devices/system/cpu", ec)) return {};
+    const long cores = std::max(1L, ::sysconf(_SC_NPROCESSORS_ONLN));
+    const long long memory = static_cast<long long>(::sysconf(_SC_PHYS_PAGES)) * ::sysconf(_SC_PAGE_SIZE);
+    if (memory <= 0) return {};
+    return "numa:1(memory=" + std::to_string(memory) + ") core:" + std::to_string(cores) + " pu:1";
+}
 
 // ---- Devices ---------------------------------------------------------------------------------------
 

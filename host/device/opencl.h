@@ -85,6 +85,14 @@ std::string kernel_source(const std::string& entry_file);
 // else ~/.cache/clbdpt.
 std::string program_cache_dir();
 
+// PoCL sizes its CPU device from hwloc's view of the machine, which hwloc reads from /sys.
+// Where /sys is not mounted (a bare chroot, some containers) hwloc finds no memory at all and
+// PoCL aborts the whole process ("Not enough memory to run on this device"). There this returns
+// a synthetic hwloc topology (HWLOC_SYNTHETIC, with HWLOC_COMPONENTS=synthetic) of the cores and
+// memory sysconf reports, which clbdpt sets for itself before its first OpenCL call; elsewhere
+// (or if the memory is unknown) it is empty.
+std::string hwloc_topology_without_sysfs();
+
 // Helper for error messages: "CL_OUT_OF_RESOURCES" etc.
 const char* cl_error_name(int code);
 

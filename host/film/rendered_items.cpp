@@ -1,9 +1,5 @@
 #include "film/rendered_items.h"
 
-#include <algorithm>
-
-#include "shared/types.h"
-
 namespace clbdpt {
 
 void add_to_film(Film& film, const RenderedItems& items) {
@@ -20,7 +16,7 @@ void add_to_film(Film& film, const RenderedItems& items) {
         dst[1] += c[1];
         dst[2] += c[2];
     }
-    for (const RenderedItems::Splat& s : items.splats) {
+    for (const SplatRecord& s : items.splats) {
         double* light = &film.light_sum[size_t(s.pixel) * 3];
         light[0] += s.r;
         light[1] += s.g;

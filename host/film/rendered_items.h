@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "film/film.h"
+#include "shared/types.h"
 
 namespace clbdpt {
 
@@ -44,16 +45,13 @@ struct RenderedItems {
     // Per item: rgb. Items in dropped_items (sorted) are not added.
     std::vector<float> camera;
     std::vector<int> dropped_items;
-    // Light-image splats: pixel and rgb, in the order they are added.
-    struct Splat {
-        int pixel;
-        float r, g, b;
-    };
-    std::vector<Splat> splats;
+    // Light-image splats as the kernel wrote them (none with pixel < 0), in the order they are
+    // added.
+    std::vector<SplatRecord> splats;
     // Strategy-image records (strategy images on): the strategy's slot and the record.
     struct StrategySplat {
         int slot;
-        Splat splat;
+        SplatRecord splat;
     };
     std::vector<StrategySplat> strategy_splats;
     int strategy_slots = 0;   // 0: no strategy images

@@ -83,7 +83,7 @@ private:
             const RenderedItems& r = results[k];
             ok = r.sample_index == runs[k].pass && r.first_item == runs[k].first_item &&
                  r.item_count == runs[k].item_count && r.pixel_stride == 1;
-            for (const RenderedItems::Splat& s : r.splats) ok = ok && s.pixel >= 0 && s.pixel < pixels_;
+            for (const SplatRecord& s : r.splats) ok = ok && s.pixel >= 0 && s.pixel < pixels_;
             for (const RenderedItems::StrategySplat& s : r.strategy_splats)
                 ok = ok && s.splat.pixel >= 0 && s.splat.pixel < pixels_ && s.slot >= 0 && s.slot < r.strategy_slots;
         }

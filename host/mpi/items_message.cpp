@@ -124,7 +124,7 @@ std::vector<RenderedItems> decode_results(const std::vector<uint8_t>& bytes) {
         items.strategy_stride = r.get<int>();
         items.camera = r.get_vector<float>();
         items.dropped_items = r.get_vector<int>();
-        items.splats = r.get_vector<RenderedItems::Splat>();
+        items.splats = r.get_vector<SplatRecord>();
         items.strategy_splats = r.get_vector<RenderedItems::StrategySplat>();
         items.counts.samples = r.get<uint64_t>();
         items.counts.rays = r.get<uint64_t>();

@@ -238,7 +238,7 @@ void Renderer::collect(RenderedItems& out, const PassSpec& pass, int first_item,
         const SplatRecord* splats = splats_host_.data() + size_t(i) * splat_slots_;
         for (int k = 0; k < splat_slots_; ++k) {
             const SplatRecord& r = splats[k];
-            if (r.pixel >= 0) out.splats.push_back({r.pixel, r.r, r.g, r.b});
+            if (r.pixel >= 0) out.splats.push_back(r);
         }
     }
     if (strategy_slots_ > 0) {
@@ -250,9 +250,7 @@ void Renderer::collect(RenderedItems& out, const PassSpec& pass, int first_item,
             }
             const SplatRecord* records = strategy_host_.data() + size_t(i) * strategy_slots_;
             for (int slot = 0; slot < strategy_slots_; ++slot)
-                if (records[slot].pixel >= 0)
-                    out.strategy_splats.push_back(
-                        {slot, {records[slot].pixel, records[slot].r, records[slot].g, records[slot].b}});
+                if (records[slot].pixel >= 0) out.strategy_splats.push_back({slot, records[slot]});
         }
     }
     out.counts.samples += uint64_t(item_count);

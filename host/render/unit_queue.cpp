@@ -27,6 +27,11 @@ UnitQueue::UnitQueue(const WorkUnits& units, Film* film, int passes, double budg
     end_ = int64_t(timed_ ? 1 : std::max(passes, 0)) * units_.units_per_pass;
 }
 
+UnitQueue::Clock::duration UnitQueue::time_for(int64_t begin, int64_t end, double rate) const {
+    return std::chrono::duration_cast<Clock::duration>(
+        std::chrono::duration<double>(double(units_.items_in(begin, end)) / rate));
+}
+
 double UnitQueue::seconds_since_start() const {
     return std::chrono::duration<double>(Clock::now() - start_).count();
 }
@@ -72,9 +77,7 @@ std::optional<UnitQueue::Grab> UnitQueue::take_over(int worker, Clock::time_poin
         if (h.worker == worker || h.duplicated) continue;
         // A holder past its expected end is assumed to need as long again as it has taken.
         const Clock::time_point holder_end = h.expected_end > now ? h.expected_end : now + (now - h.start);
-        const auto mine = std::chrono::duration_cast<Clock::duration>(
-            std::chrono::duration<double>(double(units_.items_in(h.begin, h.end)) / rate));
-        if (now + mine < holder_end && (!best || holder_end > best_end)) {
+        if (now + time_for(h.begin, h.end, rate) < holder_end && (!best || holder_end > best_end)) {
             best = &h;
             best_end = holder_end;
         }
@@ -91,9 +94,7 @@ std::optional<UnitQueue::Grab> UnitQueue::take(int worker) {
         const Clock::time_point now = Clock::now();
         const double rate = rate_[size_t(worker)];
         auto expected_end = [&](int64_t begin, int64_t end) {
-            if (rate <= 0) return Clock::time_point::max();
-            return now + std::chrono::duration_cast<Clock::duration>(
-                             std::chrono::duration<double>(double(units_.items_in(begin, end)) / rate));
+            return rate > 0 ? now + time_for(begin, end, rate) : Clock::time_point::max();
         };
         if (!given_back_.empty()) {
             Held h = given_back_.back();

@@ -100,6 +100,8 @@ private:
     void add_ready_results();
     std::optional<Grab> leave();
     double seconds_since_start() const;
+    // How long units [begin, end) take at `rate` items per second.
+    Clock::duration time_for(int64_t begin, int64_t end, double rate) const;
 
     const WorkUnits units_;
     Film* film_;
