@@ -102,12 +102,7 @@ inline float3 env_direction(float2 uv) {
     return (float3)(theta_cs.y * phi_cs.x, theta_cs.x, theta_cs.y * phi_cs.y);
 }
 
-inline float2 env_uv(float3 w) {
-    float theta = acos(clamp(w.y, -1.0f, 1.0f));
-    float phi = atan2(w.z, w.x);
-    if (phi < 0.0f) phi += 2.0f * PI_F;
-    return (float2)(phi * (0.5f * INV_PI_F), theta * INV_PI_F);
-}
+inline float2 env_uv(float3 w) { return (float2)(atan2_turns(w.z, w.x), acos_half_turns(w.y)); }
 
 inline int env_texel(const SceneData* scene, float2 uv) {
     int w = scene->info.env_width, h = scene->info.env_height;
@@ -142,8 +137,10 @@ inline float environment_pdf_w(const SceneData* scene, float3 w) {
 #endif
 }
 
-/* Samples a direction toward the environment; returns it with its solid-angle density. */
-inline float3 environment_sample_direction(const SceneData* scene, float2 u, float* pdf_w) {
+/* Samples a direction toward the environment; returns it with its solid-angle density and the
+ * radiance arriving from it (the sampled texel's: no mapping back from the direction). */
+inline float3 environment_sample_direction(const SceneData* scene, float2 u, float* pdf_w, float3* radiance) {
+    __global const Light* light = &scene->lights[scene->info.environment_light];
 #ifdef HAS_ENVIRONMENT_MAP
     int width = scene->info.env_width, height = scene->info.env_height;
     __global const float* func = scene->env_distribution;
@@ -158,11 +155,14 @@ inline float3 environment_sample_direction(const SceneData* scene, float2 u, flo
     float2 uv = (float2)(((float)x + du) / (float)width, ((float)y + dv) / (float)height);
     float sin_theta = unit_circle_turns(0.5f * uv.y).y;
     *pdf_w = 0.0f;
+    *radiance = (float3)(0.0f);
     if (sin_theta == 0.0f || integral == 0.0f) return (float3)(0.0f, 1.0f, 0.0f);
     *pdf_w = (func[y * width + x] / integral) / (2.0f * PI_F * PI_F * sin_theta);
+    *radiance = xyz(light->emission) * xyz(scene->env_texels[y * width + x]);
     return env_direction(uv);
 #else
     *pdf_w = INV_4PI_F;
+    *radiance = xyz(light->emission);
     return sample_uniform_sphere(u);
 #endif
 }
@@ -227,9 +227,8 @@ inline int light_sample_li(const SceneData* scene, int index, float3 ref, float2
 #endif
 #ifdef HAS_ENVIRONMENT
     case LIGHT_ENVIRONMENT:
-        ls->wi = environment_sample_direction(scene, u, &ls->pdf_w);
+        ls->wi = environment_sample_direction(scene, u, &ls->pdf_w, &ls->li);
         ls->p = ref + ls->wi * (2.0f * scene_radius(scene));
-        ls->li = environment_radiance(scene, ls->wi);
         break;
 #endif
     default:
@@ -320,14 +319,13 @@ inline int light_sample_le(const SceneData* scene, int index, float2 u_pos, floa
 #ifdef HAS_ENVIRONMENT
     case LIGHT_ENVIRONMENT: {
         float pdf_w;
-        float3 w_light = environment_sample_direction(scene, u_dir, &pdf_w);
+        float3 w_light = environment_sample_direction(scene, u_dir, &pdf_w, &er->le);
         bounding_disk_point(scene, w_light, u_pos, &er->origin);
         er->dir = -w_light;
         er->n = er->dir;
         float r = scene_radius(scene);
         er->pdf_pos = 1.0f / (PI_F * r * r);
         er->pdf_dir = pdf_w;
-        er->le = environment_radiance(scene, w_light);
         break;
     }
 #endif

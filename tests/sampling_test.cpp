@@ -84,6 +84,51 @@ TEST(Sampling, UnitCircleMatchesDoublePrecision) {
     EXPECT_LE(worst_norm, 2e-7) << "worst distance from the unit circle";
 }
 
+// atan2_turns and acos_half_turns (cl/geometry.h), which map directions to environment-map
+// coordinates, against double precision: points on the unit circle every 2^-16 turn plus the
+// axes, the diagonals and their float neighbours (where the reductions switch branch), off-circle
+// points of other lengths, and cosines in [-1, 1] on a grid of 2^17 steps plus the ends and the
+// neighbours of +-0.5 (the branch point). Measured worst: 6.7e-8 (atan2_turns), 8.5e-8
+// (acos_half_turns); the bound 2e-7 is 3.4 ulp of 0.5 (a wrong branch or octant errs by 0.1 or
+// more), and far below an environment texel (1e-4 of a turn for a map 10 000 texels wide).
+TEST(Sampling, InverseTrigMatchesDoublePrecision) {
+    std::vector<cl_float4> in;
+    const int n = 1 << 16;
+    for (int i = 0; i < n; ++i) {
+        const double phi = 2 * kPi * double(i) / n;
+        const float c = float(2.0 * i / n - 1.0);
+        in.push_back({{float(std::cos(phi)), float(std::sin(phi)), c, 0}});
+        in.push_back({{float(3.5 * std::cos(phi)), float(3.5 * std::sin(phi)), float(2.0 * (i + 0.5) / n - 1.0), 0}});
+    }
+    for (float x : {0.0f, -0.0f, 1.0f, -1.0f, 1e-30f, -1e-30f, 0.5f, -0.5f}) {
+        for (float y : {0.0f, 1.0f, -1.0f, 1e-30f, -1e-30f, 0.5f, -0.5f, std::nextafter(0.5f, 1.0f),
+                        std::nextafter(0.5f, 0.0f)})
+            in.push_back({{x, y, x, 0}});
+    }
+    for (float c : {1.0f, -1.0f, std::nextafter(1.0f, 0.0f), std::nextafter(-1.0f, 0.0f)}) in.push_back({{1, 0, c, 0}});
+    cl::Kernel k = test_kernel("kernels/sampling_test.cl", {}, "inverse_trig_test");
+    cl::Buffer ib = upload(in);
+    cl::Buffer out = output_buffer<cl_float2>(in.size());
+    k.setArg(0, ib);
+    k.setArg(1, out);
+    launch(k, in.size());
+    std::vector<cl_float2> r = download<cl_float2>(out, in.size());
+    double worst_atan2 = 0, worst_acos = 0;
+    for (size_t i = 0; i < in.size(); ++i) {
+        const double x = in[i].s[0], y = in[i].s[1], c = in[i].s[2];
+        double turns = x == 0 && y == 0 ? 0.0 : std::atan2(y, x) / (2 * kPi);
+        if (turns < 0) turns += 1;
+        // Angles a rounding away from a full turn may come out as 0 or 1.
+        double e = std::min(std::abs(r[i].s[0] - turns), std::abs(std::abs(r[i].s[0] - turns) - 1));
+        worst_atan2 = std::max(worst_atan2, e);
+        worst_acos = std::max(worst_acos, std::abs(r[i].s[1] - std::acos(c) / kPi));
+        ASSERT_TRUE(r[i].s[0] >= 0 && r[i].s[0] <= 1) << "atan2_turns(" << y << ", " << x << ") = " << r[i].s[0];
+        ASSERT_TRUE(r[i].s[1] >= 0 && r[i].s[1] <= 1) << "acos_half_turns(" << c << ") = " << r[i].s[1];
+    }
+    EXPECT_LE(worst_atan2, 2e-7) << "worst |error| of atan2_turns";
+    EXPECT_LE(worst_acos, 2e-7) << "worst |error| of acos_half_turns";
+}
+
 // Concentric disk: area-preserving, so r^2 and phi are uniform.
 TEST(Sampling, ConcentricDiskIsUniform) {
     std::vector<cl_float4> s = warp(kDisk, 0, kSamples, 1);

@@ -52,3 +52,10 @@ __kernel void unit_circle_test(__global const float* u, __global const float* a,
     int gid = get_global_id(0);
     out[gid] = (float4)(unit_circle_turns(u[gid]), unit_circle_octant(a[gid]));
 }
+
+/* out[i] = (atan2_turns(y, x), acos_half_turns(c)) for in[i] = (x, y, c, unused). */
+__kernel void inverse_trig_test(__global const float4* in, __global float2* out) {
+    int gid = get_global_id(0);
+    float4 v = in[gid];
+    out[gid] = (float2)(atan2_turns(v.y, v.x), acos_half_turns(v.z));
+}
