@@ -3,7 +3,8 @@
 //
 // Scenes (deterministic): the open Cornell box with its two blocks (32 triangles), and the open
 // box with two tessellated spheres of about --triangles triangles in all (the scene of the
-// project's Embree reference figures). Ray kinds:
+// project's Embree reference figures), or any scene file the renderer loads (--obj: a bare .obj
+// or a .json scene). Ray kinds:
 //   primary     closest hit, pinhole camera grid (coherent)
 //   bounce      closest hit, cosine-distributed from the primary hits
 //   random      closest hit, random origins in the scene bounds, random directions
@@ -16,7 +17,13 @@
 // two tracers agree (hit or miss, and t within 1e-3 relative).
 //
 // Usage: traversal_bench [--triangles N] [--rays N] [--repeats K] [--local L] [--device S]
-//                        [--scene cornell|spheres|all] [--only KIND] [--huge-pages] [--no-embree]
+//                        [--scene cornell|spheres|all] [--obj FILE] [--only KIND] [--huge-pages]
+//                        [--no-embree] [--embree-quality high|medium]
+// --obj: instead of the built-in scenes, the triangles of FILE. Its primary rays look from the
+// centre of its bounds along the longer horizontal axis (inside an interior such as Sponza's
+// atrium), and its light rays aim at a patch spanning the middle half of the bounds' top, just
+// below it (the sky over an atrium). --embree-quality: Embree's build, high (the default: with
+// spatial splits, which clbdpt's builder does not make) or medium (binned SAH alone).
 // --local: work-group size (0 = the driver's choice). --huge-pages: BVH and triangles in host
 // memory on transparent huge pages (CL_MEM_USE_HOST_PTR) instead of a driver copy.
 #include <algorithm>
@@ -34,6 +41,7 @@
 
 #include "bvh/bvh.h"
 #include "device/opencl.h"
+#include "scene/scene.h"
 #include "util/error.h"
 #include "util/vec3.h"
 
@@ -54,9 +62,11 @@ struct Options {
     int local = 0;
     std::string device;
     std::string scene = "all";
+    std::string obj;   // a scene file instead of the built-in scenes
     std::string only;  // one ray kind, for profiling
     bool huge_pages = false;
     bool embree = true;
+    std::string embree_quality = "high";  // high: with spatial splits; medium: without
 };
 
 // ---- Scenes ---------------------------------------------------------------------------------
@@ -92,6 +102,9 @@ struct Scene {
     std::string name;
     std::vector<Triangle> triangles;
     Vec3 light_corner, light_u, light_v;  // the ceiling light, a parallelogram
+    // The pinhole camera of the primary rays: vertical field of view in degrees.
+    Vec3 eye{278, 273, -800}, forward{0, 0, 1}, right{-1, 0, 0}, up{0, 1, 0};
+    float fov = 39.3f;
 };
 
 // The open Cornell box (classic 555-unit dimensions, no front wall) and its light.
@@ -142,6 +155,25 @@ Scene spheres_scene(long triangles) {
     sphere(s.triangles, {186, 120, 170}, 120, rings, 2 * rings);
     sphere(s.triangles, {370, 150, 370}, 150, rings, 2 * rings);
     s.name = "spheres";
+    return s;
+}
+
+// Any scene the renderer loads, seen from the centre of its bounds (see --obj above).
+Scene file_scene(const std::string& path) {
+    clbdpt::Scene loaded = load_scene(path);
+    Scene s;
+    s.name = path;
+    s.triangles = std::move(loaded.triangles);
+    const Bounds3& b = loaded.bounds;
+    Vec3 size = b.hi - b.lo;
+    s.eye = b.center();
+    s.forward = size.x >= size.z ? Vec3{1, 0, 0} : Vec3{0, 0, 1};
+    s.up = {0, 1, 0};
+    s.right = cross(s.forward, s.up);
+    s.fov = 60.0f;
+    s.light_corner = {b.lo.x + 0.25f * size.x, b.hi.y - 0.01f * size.y, b.lo.z + 0.25f * size.z};
+    s.light_u = {0.5f * size.x, 0, 0};
+    s.light_v = {0, 0, 0.5f * size.z};
     return s;
 }
 
@@ -196,11 +228,10 @@ Vec3 offset_origin(Vec3 p, Vec3 ng, Vec3 w) {
 }
 
 RaySet primary_rays(const Scene& scene, long count) {
-    (void)scene;
     RaySet set{"primary", false, {}, {}};
     int w = int(std::sqrt(double(count))), h = int((count + w - 1) / w);
-    Vec3 eye{278, 273, -800}, forward{0, 0, 1}, right{-1, 0, 0}, up{0, 1, 0};
-    float tan_half = std::tan(0.5f * 39.3f * float(M_PI) / 180.0f);
+    const Vec3 &eye = scene.eye, &forward = scene.forward, &right = scene.right, &up = scene.up;
+    float tan_half = std::tan(0.5f * scene.fov * float(M_PI) / 180.0f);
     for (long i = 0; i < count; ++i) {
         int x = int(i % w), y = int(i / w);
         float sx = (2.0f * (x + 0.5f) / float(w) - 1.0f) * tan_half;
@@ -366,12 +397,13 @@ int hit_triangle(const cl_float4& h) {
 #ifdef CLBDPT_HAVE_EMBREE
 class EmbreeTracer {
 public:
-    EmbreeTracer(const std::vector<Triangle>& tris, int threads) : threads_(threads) {
+    EmbreeTracer(const std::vector<Triangle>& tris, int threads, bool spatial_splits) : threads_(threads) {
         device_ = rtcNewDevice(("threads=" + std::to_string(threads)).c_str());
         if (!device_) throw Error("rtcNewDevice failed");
         auto t0 = Clock::now();
         scene_ = rtcNewScene(device_);
-        rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_HIGH);
+        // Quality high builds with spatial splits; medium is binned SAH alone, like clbdpt's.
+        rtcSetSceneBuildQuality(scene_, spatial_splits ? RTC_BUILD_QUALITY_HIGH : RTC_BUILD_QUALITY_MEDIUM);
         RTCGeometry geom = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
         float* v = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
                                                                3 * sizeof(float), 3 * tris.size()));
@@ -497,8 +529,9 @@ void run_scene(const Scene& scene, const Options& opt, DeviceContext& ctx) {
 #ifdef CLBDPT_HAVE_EMBREE
     std::unique_ptr<EmbreeTracer> embree;
     if (opt.embree) {
-        embree = std::make_unique<EmbreeTracer>(tris, 2);
-        std::printf("  Embree BVH: build %.3f s (quality high, 2 threads)\n", embree->build_seconds);
+        embree = std::make_unique<EmbreeTracer>(tris, 2, opt.embree_quality == "high");
+        std::printf("  Embree BVH: build %.3f s (quality %s, 2 threads)\n", embree->build_seconds,
+                    opt.embree_quality.c_str());
     }
 #endif
 
@@ -628,13 +661,17 @@ int run(int argc, char** argv) {
         else if (a == "--local") opt.local = int(parse_long("--local", next)), ++i;
         else if (a == "--device" && next) opt.device = next, ++i;
         else if (a == "--scene" && next) opt.scene = next, ++i;
+        else if (a == "--obj" && next) opt.obj = next, ++i;
         else if (a == "--only" && next) opt.only = next, ++i;
         else if (a == "--huge-pages") opt.huge_pages = true;
         else if (a == "--no-embree") opt.embree = false;
+        else if (a == "--embree-quality" && next && (std::string(next) == "high" || std::string(next) == "medium"))
+            opt.embree_quality = next, ++i;
         else {
             std::fprintf(stderr,
                          "usage: traversal_bench [--triangles N] [--rays N] [--repeats K] [--local L] "
-                         "[--device S] [--scene cornell|spheres|all] [--only KIND] [--huge-pages] [--no-embree]\n");
+                         "[--device S] [--scene cornell|spheres|all] [--obj FILE] [--only KIND] [--huge-pages] "
+                         "[--no-embree] [--embree-quality high|medium]\n");
             return a == "--help" || a == "-h" ? 0 : 2;
         }
     }
@@ -650,6 +687,10 @@ int run(int argc, char** argv) {
     std::printf("rays per kind: %ld, repeats: %d (median reported), BVH width %d%s\n", opt.rays, opt.repeats, BVH_WIDTH,
                 opt.huge_pages ? ", huge pages" : "");
 
+    if (!opt.obj.empty()) {
+        run_scene(file_scene(opt.obj), opt, ctx);
+        return 0;
+    }
     if (opt.scene == "cornell" || opt.scene == "all") run_scene(cornell_scene(), opt, ctx);
     if (opt.scene == "spheres" || opt.scene == "all") run_scene(spheres_scene(opt.triangles), opt, ctx);
     return 0;
