@@ -33,8 +33,8 @@ inline float2 unit_circle_turns(float u) {
 
 /* The angle of (x, y) from +x towards +y in turns, in [0, 1]; 0 for (0, 0). Cephes' atanf
  * polynomial on the smaller-over-larger ratio, reduced once more at tan(pi / 8) (a few ulp of
- * a turn). The library's atan2 costs as much as a path vertex's shading on PoCL (15% of a path
- * tracer's time under a sky map). */
+ * a turn). On PoCL the library's atan2 and acos took about a fifth of a path tracer's time
+ * under a sky map (perf), for a lookup that needs a texel. */
 inline float atan2_turns(float y, float x) {
     float ax = fabs(x), ay = fabs(y);
     float hi = max(ax, ay), lo = min(ax, ay);
@@ -45,27 +45,26 @@ inline float atan2_turns(float y, float x) {
         a = (a - 1.0f) / (a + 1.0f);
     }
     float z = a * a;
-    float r = base + a + a * z * (-3.33329491539e-1f + z * (1.99777106478e-1f + z * (-1.38776856032e-1f + z * 8.05374449538e-2f)));
+    float r = base + a +
+              a * z * (-3.33329491539e-1f + z * (1.99777106478e-1f + z * (-1.38776856032e-1f + z * 8.05374449538e-2f)));
     if (ay > ax) r = 0.5f * PI_F - r;
     if (x < 0.0f) r = PI_F - r;
     float turns = r * (0.5f * INV_PI_F);
     return y < 0.0f ? 1.0f - turns : turns;
 }
 
-/* acos(c) / pi for c in [-1, 1] (clamped), in [0, 1]: Cephes' asinf polynomial, on
- * sqrt((1 - |c|) / 2) near the poles where acos(c) = 2 asin of it (a few ulp). */
+/* acos(c) / pi for c in [-1, 1] (clamped), in [0, 1], from Cephes' asinf polynomial (a few
+ * ulp): acos(a) = pi / 2 - asin(a) for |c| = a <= 1/2, and 2 asin(sqrt((1 - a) / 2)) nearer the
+ * poles. */
 inline float acos_half_turns(float c) {
     float a = min(fabs(c), 1.0f);
-    float r;
-    if (a > 0.5f) {
-        float z = 0.5f * (1.0f - a);
-        float s = sqrt(z);
-        r = 2.0f * (s + s * z * (1.6666752422e-1f + z * (7.4953002686e-2f + z * (4.5470025998e-2f + z * (2.4181311049e-2f + z * 4.2163199048e-2f)))));
-    } else {
-        float z = a * a;
-        r = 0.5f * PI_F - (a + a * z * (1.6666752422e-1f + z * (7.4953002686e-2f + z * (4.5470025998e-2f + z * (2.4181311049e-2f + z * 4.2163199048e-2f)))));
-    }
-    float half_turns = r * INV_PI_F;
+    bool near_pole = a > 0.5f;
+    float z = near_pole ? 0.5f * (1.0f - a) : a * a; /* the square of asin's argument x */
+    float x = near_pole ? sqrt(z) : a;
+    float p = 1.6666752422e-1f +
+              z * (7.4953002686e-2f + z * (4.5470025998e-2f + z * (2.4181311049e-2f + z * 4.2163199048e-2f)));
+    float asin_x = x + x * z * p;
+    float half_turns = (near_pole ? 2.0f * asin_x : 0.5f * PI_F - asin_x) * INV_PI_F;
     return c < 0.0f ? 1.0f - half_turns : half_turns;
 }
 
