@@ -754,7 +754,9 @@ void check_integrator(Integrator integrator, bool thin, uint64_t seed, Mix mix =
         const int kind = ts.ds.lights[size_t(light)].kind;
         EXPECT_GT(per_kind[size_t(kind)], target / 20) << "light kind " << kind;
     }
-    if (media) EXPECT_GT(medium_vertices, target / 2) << "medium vertices";  // about 1.2 per path
+    if (media) {
+        EXPECT_GT(medium_vertices, target / 2) << "medium vertices";  // about 1.2 per path
+    }
     // Full bdpt has the most strategies that can connect at such a vertex.
     if (integrator == Integrator::Bdpt && mix.light_subpaths == 1 && mix.inner_connections) {
         EXPECT_GT(across_terminator, target / 50) << "terminator paths";

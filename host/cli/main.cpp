@@ -328,6 +328,8 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
     const Clock::time_point device_scene_start = Clock::now();
     DeviceScene ds = build_device_scene(scene, width, height);
     const double device_scene_seconds = seconds_since(device_scene_start);
+    if (leader)
+        for (const std::string& w : ds.warnings) std::fprintf(stderr, "clbdpt: warning: %s\n", w.c_str());
     if (scene.camera_is_automatic) {
         const AutomaticView view = choose_automatic_view(scene.camera, scene.bounds, ds);
         if (view.moved_inside) {

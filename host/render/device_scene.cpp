@@ -6,7 +6,7 @@
 #include <map>
 #include <numeric>
 
-#include "bvh/bvh_query.h"
+#include "render/media_nesting.h"
 #include "util/error.h"
 
 namespace clbdpt {
@@ -128,18 +128,10 @@ std::vector<float> environment_distribution(const EnvironmentMap& map) {
 
 namespace {
 
-// The medium at point p (1 + index, 0 = vacuum): the side facing p of the first surface a probe
-// ray meets (media boundaries are closed, medium_boundaries.cpp), or the scene's medium where
-// the ray meets nothing. The direction is an arbitrary one that no axis-aligned wall contains.
+// The medium at point p (1 + index, 0 = vacuum), seen along a direction that no axis-aligned
+// wall contains.
 int medium_at(const DeviceScene& ds, int scene_medium, Vec3 p) {
-    const Vec3 d = normalize(Vec3(0.3137f, 0.8712f, 0.3776f));
-    float distance;
-    const int hit = closest_hit_triangle(ds.nodes, ds.triangles, p, d, &distance);
-    if (hit < 0) return scene_medium;
-    const Triangle& t = ds.triangles[size_t(hit)];
-    const Vec3 ng = cross(vec3_of(t.p1) - vec3_of(t.p0), vec3_of(t.p2) - vec3_of(t.p0));
-    const Material& m = ds.materials[size_t(ds.infos[size_t(hit)].material)];
-    return dot(d, ng) < 0.0f ? m.exterior_medium : m.interior_medium;
+    return medium_seen_along(ds, scene_medium, p, normalize(Vec3(0.3137f, 0.8712f, 0.3776f)));
 }
 
 }  // namespace
@@ -296,6 +288,7 @@ DeviceScene build_device_scene(const Scene& scene, int width, int height) {
     ds.info.light_count = int(ds.lights.size());
     ds.info.triangle_count = int(ds.triangles.size());
     ds.info.node_count = int(ds.nodes.size());
+    ds.warnings = check_media_nesting(scene, ds);
     return ds;
 }
 

@@ -31,6 +31,7 @@ struct DeviceScene {
     Camera camera{};
     SceneInfo info{};
     double bvh_build_seconds = 0;
+    std::vector<std::string> warnings;    // one line each (render/media_nesting.h)
 };
 
 // width/height: the film size actually rendered (scene's, or the command line's overrides).
