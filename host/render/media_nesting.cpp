@@ -35,8 +35,17 @@ int medium_seen_along(const DeviceScene& ds, int scene_medium, Vec3 p, Vec3 d) {
 std::vector<std::string> check_media_nesting(const Scene& scene, const DeviceScene& ds) {
     std::vector<std::string> warnings;
     if (scene.media.empty()) return warnings;
-    std::vector<std::vector<size_t>> by_material(ds.materials.size());
-    for (size_t i = 0; i < ds.infos.size(); ++i) by_material[size_t(ds.infos[i].material)].push_back(i);
+    // Up to kProbesPerMaterial triangles of each material, spread over its triangles in BVH
+    // order (so over space), without a list of every triangle per material.
+    std::vector<size_t> count(ds.materials.size(), 0);
+    for (const TriangleInfo& info : ds.infos) ++count[size_t(info.material)];
+    std::vector<std::vector<size_t>> probes(ds.materials.size());
+    std::vector<size_t> seen(ds.materials.size(), 0);
+    for (size_t i = 0; i < ds.infos.size(); ++i) {
+        const size_t m = size_t(ds.infos[i].material);
+        const size_t step = (count[m] + kProbesPerMaterial - 1) / kProbesPerMaterial;  // >= 1
+        if (seen[m]++ % step == 0) probes[m].push_back(i);
+    }
     // The probes leave the surface a hair off its plane (1e-5 of the scene's radius: below any
     // gap a model would leave between a surface and a boundary), slightly off the normal so
     // that they do not run along axis-aligned walls.
@@ -45,12 +54,10 @@ std::vector<std::string> check_media_nesting(const Scene& scene, const DeviceSce
     const Vec3 tilt = normalize(Vec3(0.3137f, 0.8712f, 0.3776f)) * 0.05f;
     for (size_t m = 0; m < ds.materials.size(); ++m) {
         const Material& material = ds.materials[m];
-        const std::vector<size_t>& tris = by_material[m];
-        if (material.kind == MATERIAL_INTERFACE || tris.empty()) continue;
+        if (material.kind == MATERIAL_INTERFACE) continue;
         int probed = 0, wrong = 0, found = -1, declared = -1;
-        const size_t step = tris.size() > kProbesPerMaterial ? tris.size() / kProbesPerMaterial : 1;
-        for (size_t k = 0; k < tris.size(); k += step) {
-            const Triangle& t = ds.triangles[tris[k]];
+        for (size_t i : probes[m]) {
+            const Triangle& t = ds.triangles[i];
             const Vec3 n = geometric_normal(t);
             if (!(length(n) > 0)) continue;  // degenerate: no sides
             const Vec3 c = (vec3_of(t.p0) + vec3_of(t.p1) + vec3_of(t.p2)) * (1.0f / 3.0f);
