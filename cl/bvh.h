@@ -240,7 +240,9 @@ __attribute__((always_inline)) inline bool bvh_hit_triangle(__global const float
 /* Closest hit along o + t d with t in (0, tmax). d need not be unit length; t is in units of
  * |d|. On a miss returns false with hit->triangle = -1 and hit->t = tmax. With exclude_end,
  * hits within the rounding error of t of tmax do not count either (as in occluded): the
- * closest hit strictly inside a segment whose far end lies on a surface. */
+ * closest hit strictly inside a segment whose far end lies on a surface.
+ * BVH_COUNT_VISITS (a diagnostic build, traversal_bench --count-visits) returns the numbers of
+ * nodes visited and triangles tested in hit->b1 and hit->b2 instead of the barycentrics. */
 __attribute__((always_inline)) inline bool intersect_closest(__global const BvhNode* nodes,
                                                              __global const Triangle* tris, const Cutouts* cutouts,
                                                              float3 o, float3 d, float tmax, bool exclude_end,
@@ -252,12 +254,19 @@ __attribute__((always_inline)) inline bool intersect_closest(__global const BvhN
     float stack_t[BVH_STACK_SIZE];
     int sp = 0;
     int current = 0; /* the root, always an interior node */
+#ifdef BVH_COUNT_VISITS
+    int nodes_visited = 0, triangles_tested = 0;
+#define BVH_COUNT(counter) ++counter
+#else
+#define BVH_COUNT(counter)
+#endif
     hit->t = tmax;
     hit->b1 = 0.0f;
     hit->b2 = 0.0f;
     hit->triangle = -1;
     for (;;) {
         if (current >= 0) {
+            BVH_COUNT(nodes_visited);
             __global const BvhNode* node = nodes + current;
             bvh_floatn t_near;
             bvh_intn hit_mask = bvh_hit_boxes(node, &r, hit->t, &t_near);
@@ -271,6 +280,7 @@ __attribute__((always_inline)) inline bool intersect_closest(__global const BvhN
             int first = BVH_LEAF_FIRST(current), end = first + BVH_LEAF_COUNT(current);
             for (int i = first; i < end; ++i) {
                 float t, b1, b2;
+                BVH_COUNT(triangles_tested);
                 if (bvh_hit_triangle((__global const float*)(tris + i), &r, hit->t, false, &t, &b1, &b2)) {
 #ifdef HAS_CUTOUTS
                     if (cutouts && cutout_hides(cutouts, i, b1, b2)) continue;
@@ -286,7 +296,13 @@ __attribute__((always_inline)) inline bool intersect_closest(__global const BvhN
         }
         /* Pop the next entry the ray enters before its closest hit so far. */
         for (;;) {
-            if (sp == 0) return hit->triangle >= 0;
+            if (sp == 0) {
+#ifdef BVH_COUNT_VISITS
+                hit->b1 = (float)nodes_visited;
+                hit->b2 = (float)triangles_tested;
+#endif
+                return hit->triangle >= 0;
+            }
             --sp;
             if (stack_t[sp] <= hit->t) break;
         }
@@ -348,6 +364,7 @@ inline bool occluded(__global const BvhNode* nodes, __global const Triangle* tri
     }
 }
 
+#undef BVH_COUNT
 #undef BVH_PUSH_SORTED
 #undef BVH_CLOSEST_LANE
 #undef BVH_ANY_LANE

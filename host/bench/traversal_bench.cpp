@@ -18,12 +18,14 @@
 //
 // Usage: traversal_bench [--triangles N] [--rays N] [--repeats K] [--local L] [--device S]
 //                        [--scene cornell|spheres|all] [--obj FILE] [--only KIND] [--huge-pages]
-//                        [--no-embree] [--embree-quality high|medium]
+//                        [--no-embree] [--embree-quality high|medium] [--count-visits]
 // --obj: instead of the built-in scenes, the triangles of FILE. Its primary rays look from the
 // centre of its bounds along the longer horizontal axis (inside an interior such as Sponza's
 // atrium), and its light rays aim at a patch spanning the middle half of the bounds' top, just
 // below it (the sky over an atrium). --embree-quality: Embree's build, high (the default: with
 // spatial splits, which clbdpt's builder does not make) or medium (binned SAH alone).
+// --count-visits: after each closest-hit kind, its mean numbers of nodes visited and triangles
+// tested per ray (a second build of the kernel with counters, untimed).
 // --local: work-group size (0 = the driver's choice). --huge-pages: BVH and triangles in host
 // memory on transparent huge pages (CL_MEM_USE_HOST_PTR) instead of a driver copy.
 #include <algorithm>
@@ -67,6 +69,7 @@ struct Options {
     bool huge_pages = false;
     bool embree = true;
     std::string embree_quality = "high";  // high: with spatial splits; medium: without
+    bool count_visits = false;
 };
 
 // ---- Scenes ---------------------------------------------------------------------------------
@@ -308,13 +311,35 @@ double median(std::vector<double> v) {
 
 class ClTracer {
 public:
-    ClTracer(DeviceContext& ctx, const Bvh& bvh, const std::vector<Triangle>& tris, int local, bool huge_pages)
+    ClTracer(DeviceContext& ctx, const Bvh& bvh, const std::vector<Triangle>& tris, int local, bool huge_pages,
+             bool count_visits)
         : ctx_(ctx), local_(local) {
         nodes_ = upload(bvh.nodes.data(), bvh.nodes.size() * sizeof(BvhNode), huge_pages, &nodes_memory_);
         tris_ = upload(tris.data(), tris.size() * sizeof(Triangle), huge_pages, &tris_memory_);
         const cl::Program& program = ctx.program("kernels/trace.cl", {}).program;
         closest_ = cl::Kernel(program, "trace_closest");
         any_ = cl::Kernel(program, "trace_any");
+        if (count_visits)
+            counted_ = cl::Kernel(ctx.program("kernels/trace.cl", {"BVH_COUNT_VISITS"}).program, "trace_closest");
+    }
+
+    // The loaded closest-hit rays' mean numbers of nodes visited and triangles tested, from the
+    // diagnostic build (--count-visits).
+    std::pair<double, double> visits() {
+        size_t n = rays_->o.size();
+        cl::Buffer counts(ctx_.context(), CL_MEM_WRITE_ONLY, n * sizeof(cl_float4));
+        counted_.setArg(0, nodes_);
+        counted_.setArg(1, tris_);
+        counted_.setArg(2, ob_);
+        counted_.setArg(3, db_);
+        counted_.setArg(4, counts);
+        counted_.setArg(5, cl_int(n));
+        ctx_.queue().enqueueNDRangeKernel(counted_, cl::NullRange, cl::NDRange(n), cl::NullRange);
+        std::vector<cl_float4> out(n);
+        ctx_.queue().enqueueReadBuffer(counts, CL_TRUE, 0, n * sizeof(cl_float4), out.data());
+        double nodes = 0, triangles = 0;
+        for (const cl_float4& c : out) nodes += c.s[1], triangles += c.s[2];
+        return {nodes / double(n), triangles / double(n)};
     }
 
     // Uploads a ray set; run() then traces it.
@@ -385,7 +410,7 @@ private:
     HostMemory nodes_memory_, tris_memory_;
     const RaySet* rays_ = nullptr;
     cl::Buffer nodes_, tris_, ob_, db_, out_;
-    cl::Kernel closest_, any_;
+    cl::Kernel closest_, any_, counted_;
 };
 
 int hit_triangle(const cl_float4& h) {
@@ -525,7 +550,7 @@ void run_scene(const Scene& scene, const Options& opt, DeviceContext& ctx) {
     std::printf("  clbdpt BVH: build %.3f s, %zu nodes, %d leaves, depth %d, stack <= %d, %.1f bytes/triangle\n",
                 bvh.build_seconds, bvh.nodes.size(), bvh.leaf_count, bvh.max_depth, bvh.max_stack, bytes / double(n));
 
-    ClTracer cl_tracer(ctx, bvh, tris, opt.local, opt.huge_pages);
+    ClTracer cl_tracer(ctx, bvh, tris, opt.local, opt.huge_pages, opt.count_visits);
 #ifdef CLBDPT_HAVE_EMBREE
     std::unique_ptr<EmbreeTracer> embree;
     if (opt.embree) {
@@ -638,6 +663,10 @@ void run_scene(const Scene& scene, const Options& opt, DeviceContext& ctx) {
         }
 #endif
         std::printf("\n");
+        if (opt.count_visits && !set.any_hit) {
+            std::pair<double, double> v = cl_tracer.visits();
+            std::printf("  %-11s per ray: %.2f nodes visited, %.2f triangles tested\n", "", v.first, v.second);
+        }
         std::fflush(stdout);
     }
 }
@@ -665,13 +694,14 @@ int run(int argc, char** argv) {
         else if (a == "--only" && next) opt.only = next, ++i;
         else if (a == "--huge-pages") opt.huge_pages = true;
         else if (a == "--no-embree") opt.embree = false;
+        else if (a == "--count-visits") opt.count_visits = true;
         else if (a == "--embree-quality" && next && (std::string(next) == "high" || std::string(next) == "medium"))
             opt.embree_quality = next, ++i;
         else {
             std::fprintf(stderr,
                          "usage: traversal_bench [--triangles N] [--rays N] [--repeats K] [--local L] "
                          "[--device S] [--scene cornell|spheres|all] [--obj FILE] [--only KIND] [--huge-pages] "
-                         "[--no-embree] [--embree-quality high|medium]\n");
+                         "[--no-embree] [--embree-quality high|medium] [--count-visits]\n");
             return a == "--help" || a == "-h" ? 0 : 2;
         }
     }
