@@ -328,12 +328,7 @@ public:
     std::pair<double, double> visits() {
         size_t n = rays_->o.size();
         cl::Buffer counts(ctx_.context(), CL_MEM_WRITE_ONLY, n * sizeof(cl_float4));
-        counted_.setArg(0, nodes_);
-        counted_.setArg(1, tris_);
-        counted_.setArg(2, ob_);
-        counted_.setArg(3, db_);
-        counted_.setArg(4, counts);
-        counted_.setArg(5, cl_int(n));
+        set_trace_args(counted_, counts);
         ctx_.queue().enqueueNDRangeKernel(counted_, cl::NullRange, cl::NDRange(n), cl::NullRange);
         std::vector<cl_float4> out(n);
         ctx_.queue().enqueueReadBuffer(counts, CL_TRUE, 0, n * sizeof(cl_float4), out.data());
@@ -350,13 +345,17 @@ public:
         ob_ = cl::Buffer(c, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, n * sizeof(cl_float4), const_cast<cl_float4*>(rays.o.data()));
         db_ = cl::Buffer(c, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, n * sizeof(cl_float4), const_cast<cl_float4*>(rays.d.data()));
         out_ = cl::Buffer(c, CL_MEM_WRITE_ONLY, n * (rays.any_hit ? sizeof(int) : sizeof(cl_float4)));
-        cl::Kernel& k = rays.any_hit ? any_ : closest_;
+        set_trace_args(rays.any_hit ? any_ : closest_, out_);
+    }
+
+    // The arguments of trace_closest and trace_any (cl/kernels/trace.cl) for the loaded rays.
+    void set_trace_args(cl::Kernel& k, const cl::Buffer& out) {
         k.setArg(0, nodes_);
         k.setArg(1, tris_);
         k.setArg(2, ob_);
         k.setArg(3, db_);
-        k.setArg(4, out_);
-        k.setArg(5, cl_int(n));
+        k.setArg(4, out);
+        k.setArg(5, cl_int(rays_->o.size()));
     }
 
 

@@ -11,6 +11,8 @@
 
 namespace clbdpt {
 
+Vec3 vec3_of(const cl_float4& v) { return {v.s[0], v.s[1], v.s[2]}; }
+
 namespace {
 
 constexpr float kPi = 3.14159265358979323846f;
@@ -23,8 +25,6 @@ cl_float4 float4_of(Vec3 v, float w = 0.0f) {
     r.s[3] = w;
     return r;
 }
-
-Vec3 vec3_of(const cl_float4& v) { return {v.s[0], v.s[1], v.s[2]}; }
 
 
 bool is_emissive(const Material& m) { return m.ke.s[0] > 0 || m.ke.s[1] > 0 || m.ke.s[2] > 0; }

@@ -39,6 +39,9 @@ DeviceScene build_device_scene(const Scene& scene, int width, int height);
 
 Camera make_camera(const CameraDesc& desc, int width, int height);
 
+// The x, y, z of a device float4 (a triangle corner, a material's colour).
+Vec3 vec3_of(const cl_float4& v);
+
 // Sampling distribution of a lat-long map (layout in cl/lights.h).
 std::vector<float> environment_distribution(const EnvironmentMap& map);
 

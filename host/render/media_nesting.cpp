@@ -7,8 +7,6 @@
 namespace clbdpt {
 namespace {
 
-Vec3 vec3_of(const cl_float4& v) { return {v.s[0], v.s[1], v.s[2]}; }
-
 Vec3 geometric_normal(const Triangle& t) {
     return cross(vec3_of(t.p1) - vec3_of(t.p0), vec3_of(t.p2) - vec3_of(t.p0));
 }
