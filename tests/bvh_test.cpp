@@ -135,7 +135,8 @@ DeviceContext& device() {
 // A BVH and its reordered triangles on the device.
 class DeviceScene {
 public:
-    explicit DeviceScene(const std::vector<Triangle>& triangles) : bvh_(build_bvh(triangles)) {
+    explicit DeviceScene(const std::vector<Triangle>& triangles, const BvhOptions& options = BvhOptions())
+        : bvh_(build_bvh(triangles, options)), source_count_(triangles.size()) {
         tris_ = reorder(triangles, bvh_.order);
         DeviceContext& ctx = device();
         nodes_buf_ = cl::Buffer(ctx.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR,
@@ -148,6 +149,7 @@ public:
 
     const Bvh& bvh() const { return bvh_; }
     const std::vector<Triangle>& triangles() const { return tris_; }  // BVH order
+    size_t source_count() const { return source_count_; }
 
     std::vector<DeviceHit> closest(const std::vector<Ray>& rays) {
         std::vector<DeviceHit> hits(rays.size());
@@ -183,6 +185,7 @@ private:
     }
 
     Bvh bvh_;
+    size_t source_count_;
     std::vector<Triangle> tris_;
     cl::Buffer nodes_buf_, tris_buf_;
 };
@@ -240,6 +243,33 @@ std::vector<Triangle> closed_mesh(int n, bool sphere) {
     return tris;
 }
 
+// Long thin triangles slanted across the cube [-1, 1]^3 (beams, roof slopes, arches), among a
+// soup of small ones: their boxes overlap everything, which is what spatial splits are for.
+std::vector<Triangle> slanted_beams(int beams, int small, uint32_t seed) {
+    std::vector<Triangle> tris = random_soup(small, seed);
+    std::mt19937 rng(seed + 1);
+    std::uniform_real_distribution<float> pos(-1.0f, 1.0f), width(0.01f, 0.05f);
+    for (int i = 0; i < beams; ++i) {
+        V3 a{pos(rng), pos(rng), pos(rng)}, b{pos(rng), pos(rng), pos(rng)};
+        float w = width(rng);
+        tris.push_back(make_triangle(a, b, b + V3{w, -w, w}));
+    }
+    return tris;
+}
+
+// A closed cube of 2 x 2 quads per face, turned about two axes so its faces are slanted.
+std::vector<Triangle> slanted_cube() {
+    std::vector<Triangle> tris = closed_mesh(2, false);
+    const float a = 0.5f, b = 0.3f;
+    auto turn = [&](V3 p) {
+        V3 q{p.x * std::cos(a) - p.y * std::sin(a), p.x * std::sin(a) + p.y * std::cos(a), p.z};
+        return V3{q.x, q.y * std::cos(b) - q.z * std::sin(b), q.y * std::sin(b) + q.z * std::cos(b)};
+    };
+    // Shared corners stay bit-identical: each is turned by the same arithmetic.
+    for (Triangle& t : tris) t = make_triangle(turn(vertex(t, 0)), turn(vertex(t, 1)), turn(vertex(t, 2)));
+    return tris;
+}
+
 V3 random_direction(std::mt19937& rng) {
     std::normal_distribution<float> g;
     for (;;) {
@@ -258,28 +288,47 @@ std::vector<Ray> random_rays(int count, uint32_t seed, float extent, float tmax)
 
 // ---- Checks ------------------------------------------------------------------------------------
 
-// Walks the flattened tree and checks its invariants.
+// Walks the flattened tree and checks its invariants. With spatial splits a triangle may be
+// referenced by several leaves, each box holding only part of it; the parts' boxes together
+// must then hold the whole triangle.
 class InvariantChecker {
 public:
     InvariantChecker(const Bvh& bvh, const std::vector<Triangle>& tris) : bvh_(bvh), tris_(tris) {}
 
-    void run() {
+    void run(size_t source_count) {
         const size_t n = tris_.size();
         ASSERT_EQ(bvh_.order.size(), n);
-        std::vector<uint32_t> sorted = bvh_.order;
-        std::sort(sorted.begin(), sorted.end());
-        for (size_t i = 0; i < n; ++i) ASSERT_EQ(sorted[i], i) << "order is not a permutation";
+        std::vector<int> copies(source_count, 0);
+        for (uint32_t i : bvh_.order) {
+            ASSERT_LT(i, source_count) << "order names a triangle that does not exist";
+            ++copies[i];
+        }
+        for (size_t i = 0; i < source_count; ++i) ASSERT_GE(copies[i], 1) << "triangle " << i << " is in no leaf";
+        if (bvh_.spatial_splits == 0) {
+            EXPECT_EQ(n, source_count) << "references added without a spatial split";
+        }
+        copies_ = copies;
         ASSERT_FALSE(bvh_.nodes.empty());
         int stack = visit(0, 0);
-        EXPECT_EQ(size_t(next_first_), n) << "leaves do not cover every triangle exactly once";
+        EXPECT_EQ(size_t(next_first_), n) << "leaves do not cover every reference exactly once";
         EXPECT_EQ(size_t(next_node_), bvh_.nodes.size()) << "unreachable nodes";
         EXPECT_EQ(leaves_, bvh_.leaf_count);
         EXPECT_EQ(max_depth_, bvh_.max_depth);
         EXPECT_EQ(stack, bvh_.max_stack);
         EXPECT_LE(stack, BVH_STACK_SIZE);
+        check_split_triangles();
     }
 
 private:
+    struct Box {
+        float lo[3], hi[3];
+        bool holds(V3 p) const {
+            for (int a = 0; a < 3; ++a)
+                if (!(get(p, a) >= lo[a] && get(p, a) <= hi[a])) return false;
+            return true;
+        }
+    };
+
     float lo(const BvhNode& node, int slot, int axis) const { return node.bounds[2 * axis][slot]; }
     float hi(const BvhNode& node, int slot, int axis) const { return node.bounds[2 * axis + 1][slot]; }
 
@@ -308,14 +357,17 @@ private:
                 next_first_ += count;
                 ++leaves_;
                 max_depth_ = std::max(max_depth_, depth + 1);
+                Box box;
+                for (int a = 0; a < 3; ++a) box.lo[a] = lo(node, slot, a), box.hi[a] = hi(node, slot, a);
                 for (int i = first; i < first + count && size_t(i) < tris_.size(); ++i) {
-                    for (int v = 0; v < 3; ++v) {
-                        V3 p = vertex(tris_[size_t(i)], v);
-                        for (int a = 0; a < 3; ++a) {
-                            EXPECT_GE(get(p, a), lo(node, slot, a));
-                            EXPECT_LE(get(p, a), hi(node, slot, a));
-                        }
+                    uint32_t source = bvh_.order[size_t(i)];
+                    if (copies_[source] > 1) {
+                        // Part of a split triangle: checked with its other parts at the end.
+                        EXPECT_GT(bvh_.spatial_splits, 0);
+                        parts_[source].push_back(box);
+                        continue;
                     }
+                    for (int v = 0; v < 3; ++v) EXPECT_TRUE(box.holds(vertex(tris_[size_t(i)], v))) << "triangle outside its leaf";
                 }
             } else {
                 EXPECT_GT(c, index);
@@ -334,13 +386,44 @@ private:
         return std::max(k, k - 1 + deepest);
     }
 
+    // Every point of a split triangle (its corners, edge points and interior points on a
+    // lattice of barycentrics) lies in the box of at least one of its parts' leaves.
+    void check_split_triangles() {
+        int failures = 0;
+        for (const auto& entry : parts_) {
+            const Triangle* tri = nullptr;
+            for (size_t i = 0; i < tris_.size() && !tri; ++i)
+                if (bvh_.order[i] == entry.first) tri = &tris_[i];
+            ASSERT_NE(tri, nullptr);
+            EXPECT_EQ(entry.second.size(), size_t(copies_[entry.first]));
+            const int steps = 24;
+            for (int i = 0; i <= steps; ++i) {
+                for (int j = 0; i + j <= steps; ++j) {
+                    float b1 = float(i) / steps, b2 = float(j) / steps;
+                    V3 p = vertex(*tri, 0) * (1 - b1 - b2) + vertex(*tri, 1) * b1 + vertex(*tri, 2) * b2;
+                    if (i == 0 && j == 0) p = vertex(*tri, 0);
+                    if (i == steps) p = vertex(*tri, 1);
+                    if (j == steps) p = vertex(*tri, 2);
+                    bool held = false;
+                    for (const Box& b : entry.second) held = held || b.holds(p);
+                    if (!held && ++failures <= 5)
+                        ADD_FAILURE() << "point (" << p.x << ", " << p.y << ", " << p.z << ") of split triangle "
+                                      << entry.first << " lies in none of its " << entry.second.size() << " leaves";
+                }
+            }
+        }
+    }
+
     const Bvh& bvh_;
     const std::vector<Triangle>& tris_;
+    std::vector<int> copies_;
+    std::map<uint32_t, std::vector<Box>> parts_;
     int next_node_ = 0, next_first_ = 0, leaves_ = 0, max_depth_ = 0;
 };
 
-void check_invariants(const Bvh& bvh, const std::vector<Triangle>& tris_bvh_order) {
-    InvariantChecker(bvh, tris_bvh_order).run();
+// tris_bvh_order: the triangles reordered by bvh.order; source_count: how many there were.
+void check_invariants(const Bvh& bvh, const std::vector<Triangle>& tris_bvh_order, size_t source_count) {
+    InvariantChecker(bvh, tris_bvh_order).run(source_count);
 }
 
 // The device's closest hits agree with the brute-force loop: same t (up to rounding), and the
@@ -387,21 +470,21 @@ TEST(Bvh, InvariantsOnRandomSoup) {
     for (int count : {1, 2, 3, 5, 17, 1000, 20000}) {
         std::vector<Triangle> tris = random_soup(count, 7 + count);
         Bvh bvh = build_bvh(tris);
-        check_invariants(bvh, reorder(tris, bvh.order));
+        check_invariants(bvh, reorder(tris, bvh.order), tris.size());
     }
 }
 
 TEST(Bvh, InvariantsOnClosedMesh) {
     std::vector<Triangle> tris = closed_mesh(24, true);
     Bvh bvh = build_bvh(tris);
-    check_invariants(bvh, reorder(tris, bvh.order));
+    check_invariants(bvh, reorder(tris, bvh.order), tris.size());
 }
 
 TEST(Bvh, DegenerateInputsStayShallow) {
     // All triangles identical: no split separates them; split by count.
     std::vector<Triangle> same(3000, make_triangle({0, 0, 0}, {1, 0, 0}, {0, 1, 0}));
     Bvh a = build_bvh(same);
-    check_invariants(a, reorder(same, a.order));
+    check_invariants(a, reorder(same, a.order), same.size());
     // Centroids spaced geometrically along x: SAH peels one triangle per level; the depth guard
     // must keep the traversal stack within BVH_STACK_SIZE.
     std::vector<Triangle> chain;
@@ -411,7 +494,7 @@ TEST(Bvh, DegenerateInputsStayShallow) {
         chain.push_back(make_triangle({x, 0, 0}, {x + s, 0, 0}, {x, s, 0}));
     }
     Bvh b = build_bvh(chain);
-    check_invariants(b, reorder(chain, b.order));
+    check_invariants(b, reorder(chain, b.order), chain.size());
     // Zero-area triangles (points and segments).
     std::vector<Triangle> flat;
     for (int i = 0; i < 100; ++i) {
@@ -420,12 +503,12 @@ TEST(Bvh, DegenerateInputsStayShallow) {
         flat.push_back(make_triangle({x, 1, 0}, {x + 1, 1, 0}, {x + 2, 1, 0}));
     }
     Bvh c = build_bvh(flat);
-    check_invariants(c, reorder(flat, c.order));
+    check_invariants(c, reorder(flat, c.order), flat.size());
 }
 
 TEST(Bvh, EmptySceneMissesEverything) {
     DeviceScene scene({});
-    check_invariants(scene.bvh(), scene.triangles());
+    check_invariants(scene.bvh(), scene.triangles(), scene.source_count());
     std::vector<Ray> rays = random_rays(100, 1, 1.0f, INFINITY);
     for (const DeviceHit& h : scene.closest(rays)) EXPECT_EQ(h.triangle, -1);
     for (int o : scene.any(rays)) EXPECT_EQ(o, 0);
@@ -433,7 +516,7 @@ TEST(Bvh, EmptySceneMissesEverything) {
 
 TEST(Bvh, ClosestAndAnyHitMatchBruteForceOnRandomSoup) {
     DeviceScene scene(random_soup(3000, 42));
-    check_invariants(scene.bvh(), scene.triangles());
+    check_invariants(scene.bvh(), scene.triangles(), scene.source_count());
     std::vector<Ray> rays = random_rays(4000, 43, 1.2f, INFINITY);
     // Finite tmax too: any-hit and closest-hit must honour it.
     std::vector<Ray> short_rays = random_rays(4000, 44, 1.2f, 0.3f);
@@ -489,6 +572,80 @@ TEST(Bvh, NoLeaksThroughSharedEdgesAndVertices) {
         std::vector<Ray> subset(rays.begin(), rays.begin() + std::min<size_t>(rays.size(), 3000));
         expect_closest_matches(scene, subset);
     }
+}
+
+// Spatial splits: long slanted triangles get references on both sides of planes (within the
+// budget), every point of such a triangle stays inside some leaf, and both queries still give
+// the brute force's answers; with a budget of 0 the build has none.
+TEST(Bvh, SpatialSplitsCutLongSlantedTriangles) {
+    std::vector<Triangle> tris = slanted_beams(60, 4000, 21);
+    BvhOptions none;
+    none.spatial_split_budget = 0;
+    Bvh plain = build_bvh(tris, none);
+    EXPECT_EQ(plain.spatial_splits, 0);
+    check_invariants(plain, reorder(tris, plain.order), tris.size());
+
+    DeviceScene scene(tris);
+    const Bvh& bvh = scene.bvh();
+    EXPECT_GT(bvh.spatial_splits, 0);
+    EXPECT_GT(bvh.order.size(), tris.size());
+    EXPECT_LE(double(bvh.order.size()), double(tris.size()) * (1.0 + BvhOptions().spatial_split_budget));
+    check_invariants(bvh, scene.triangles(), scene.source_count());
+
+    std::vector<Ray> rays = random_rays(4000, 22, 1.2f, INFINITY);
+    std::vector<Ray> short_rays = random_rays(4000, 23, 1.2f, 0.3f);
+    // Rays aimed at points on the beams, which lie in several leaves' boxes.
+    std::mt19937 rng(24);
+    std::uniform_real_distribution<float> u01(0.0f, 1.0f);
+    for (size_t i = tris.size() - 60; i < tris.size(); ++i) {
+        for (int k = 0; k < 50; ++k) {
+            float b1 = u01(rng), b2 = u01(rng) * (1 - b1);
+            V3 p = vertex(tris[i], 0) * (1 - b1 - b2) + vertex(tris[i], 1) * b1 + vertex(tris[i], 2) * b2;
+            V3 o = p + random_direction(rng) * 0.5f;
+            rays.push_back({o, p - o, INFINITY});
+        }
+    }
+    int hits = 0, short_hits = 0;
+    expect_closest_matches(scene, rays, &hits);
+    expect_closest_matches(scene, short_rays, &short_hits);
+    EXPECT_GT(hits, 3000);
+    EXPECT_GT(short_hits, 200);
+}
+
+// A closed slanted cube whose faces spatial splits cut (the soup inside makes the build split
+// them): rays through its shared edges and vertices, from inside, must not leak.
+TEST(Bvh, NoLeaksThroughSplitTriangles) {
+    std::vector<Triangle> cube = slanted_cube();
+    std::vector<Triangle> tris = cube;
+    for (const Triangle& t : random_soup(500, 31)) {
+        V3 p[3];
+        for (int v = 0; v < 3; ++v) p[v] = vertex(t, v) * 0.3f;  // well inside the cube
+        tris.push_back(make_triangle(p[0], p[1], p[2]));
+    }
+    DeviceScene scene(tris);
+    ASSERT_GT(scene.bvh().spatial_splits, 0);
+    check_invariants(scene.bvh(), scene.triangles(), scene.source_count());
+    std::mt19937 rng(32);
+    std::uniform_real_distribution<float> inner(-0.45f, 0.45f), u01(0.0f, 1.0f);
+    std::vector<Ray> rays;
+    for (const Triangle& t : cube) {
+        for (int v = 0; v < 3; ++v) {
+            V3 a = vertex(t, v), b = vertex(t, (v + 1) % 3);
+            for (int k = 0; k < 20; ++k) {
+                V3 o{inner(rng) + 0.9f, inner(rng), inner(rng)};
+                o = o * 0.5f;  // inside the cube, beside the soup
+                rays.push_back({o, a - o, INFINITY});
+                rays.push_back({o, a + (b - a) * u01(rng) - o, INFINITY});
+            }
+        }
+    }
+    std::vector<DeviceHit> hits = scene.closest(rays);
+    std::vector<int> any = scene.any(rays);
+    int leaks = 0;
+    for (size_t i = 0; i < rays.size(); ++i)
+        if ((hits[i].triangle < 0 || !any[i]) && ++leaks <= 5) ADD_FAILURE() << "ray " << i << " leaked";
+    EXPECT_EQ(leaks, 0) << "of " << rays.size() << " rays";
+    expect_closest_matches(scene, rays);
 }
 
 // Grazing rays over a tessellated plane: nearly parallel rays must find the same hits as the brute

@@ -12,10 +12,12 @@
 //   - degenerate input: zero-area and duplicated triangles change nothing, coincident surfaces
 //     stay between their twins, an emitter seen from behind is black, a scene whose only
 //     emitter has no area renders black;
-//   - long paths: max depth 64 in a closed box of mirrors and diffuse walls.
+//   - long paths: max depth 64 in a closed box of mirrors and diffuse walls;
+//   - an emitter that the BVH's spatial splits cut into several references is still one light.
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 
 #include "test_scenes.h"
 #include "util/error.h"
@@ -198,6 +200,55 @@ TEST(HardCases, CeilingFillingLightMatchesItsTessellation) {
     expect_agree(bdpt, ref, kSigmas, "whole bdpt vs grid bdpt");
     expect_agree(pt, bdpt, kSigmas, "whole pt vs whole bdpt");
     expect_agree(lt, bdpt, kSigmas, "whole lt vs whole bdpt");
+}
+
+// An emitter that the BVH's spatial splits cut: a long slanted emitting quad across the room,
+// whose box overlaps the small triangles of the walls, seen by the camera. The BVH then
+// references it more than once; it must stay one light (one selection probability, the same
+// for sampling and for MIS at every copy), and bdpt, pt and lt must agree on the image.
+TEST(HardCases, EmitterCutBySpatialSplitsIsOneLight) {
+    SceneBuilder b;
+    RoomMaterials m = room_materials(b);
+    // The room's six faces, each cut into 12 x 12 quads: small triangles all around the beam's
+    // box, which a build cannot separate from the beam without cutting it.
+    const int n = 12;
+    const Vec3 corner[6] = {{-1, 0, -1}, {1, 0, -1}, {-1, 0, -1}, {-1, 2, -1}, {-1, 0, -1}, {-1, 0, 1}};
+    const Vec3 u_axis[6] = {{0, 2, 0}, {0, 2, 0}, {2, 0, 0}, {2, 0, 0}, {2, 0, 0}, {2, 0, 0}};
+    const Vec3 v_axis[6] = {{0, 0, 2}, {0, 0, 2}, {0, 0, 2}, {0, 0, 2}, {0, 2, 0}, {0, 2, 0}};
+    const int face_material[6] = {m.red, m.green, m.white, m.white, m.white, m.white};
+    for (int f = 0; f < 6; ++f)
+        for (int i = 0; i < n; ++i)
+            for (int j = 0; j < n; ++j) {
+                auto at = [&](int a, int c) { return corner[f] + u_axis[f] * (float(a) / n) + v_axis[f] * (float(c) / n); };
+                b.quad(at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1), face_material[f]);
+            }
+    int emitter = b.material(diffuse_material({0.5f, 0.5f, 0.5f}, {3.0f, 2.7f, 2.2f}), "beam");
+    // Facing down toward the floor, across the room from corner to corner.
+    b.triangle({-0.95f, 1.9f, -0.9f}, {0.9f, 1.3f, 0.95f}, {0.95f, 1.35f, 0.85f}, emitter);
+    b.triangle({-0.95f, 1.9f, -0.9f}, {0.95f, 1.35f, 0.85f}, {-0.9f, 1.95f, -0.95f}, emitter);
+    b.camera({0, 1.0f, -0.95f}, {0, 1.2f, 1}, 75.0f);
+    DeviceScene scene = build_device_scene(b.scene, kFilm, kFilm);
+
+    ASSERT_GT(scene.bvh_spatial_splits, 0);
+    int emitting_copies = 0;
+    for (size_t i = 0; i < scene.triangles.size(); ++i) {
+        const int light = scene.infos[i].light;
+        ASSERT_EQ(light >= 0, scene.infos[i].material == emitter);
+        if (light < 0) continue;
+        ++emitting_copies;
+        // The light is this very triangle (a copy of it: the same corners bit for bit).
+        const Triangle& own = scene.triangles[size_t(scene.lights[size_t(light)].triangle)];
+        EXPECT_EQ(std::memcmp(&own, &scene.triangles[i], sizeof(Triangle)), 0);
+    }
+    EXPECT_EQ(scene.lights.size(), 2u);
+    EXPECT_GT(emitting_copies, 2) << "the emitters were not cut: the test would not test the dedupe";
+
+    RegionStats bdpt = render(scene, Integrator::Bdpt, kDepth, 61, 64, "bdpt");
+    RegionStats pt = render(scene, Integrator::Pt, kDepth, 62, 64, "pt");
+    RegionStats lt = render(scene, Integrator::Lt, kDepth, 63, 64, "lt");
+    ASSERT_GT(bdpt.image_mean, 0.02);
+    expect_agree(pt, bdpt, kSigmas, "pt vs bdpt");
+    expect_agree(lt, bdpt, kSigmas, "lt vs bdpt");
 }
 
 // ---- Spot cones ------------------------------------------------------------------------------

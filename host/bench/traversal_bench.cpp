@@ -19,11 +19,14 @@
 // Usage: traversal_bench [--triangles N] [--rays N] [--repeats K] [--local L] [--device S]
 //                        [--scene cornell|spheres|all] [--obj FILE] [--only KIND] [--huge-pages]
 //                        [--no-embree] [--embree-quality high|medium] [--count-visits]
+//                        [--spatial-splits BUDGET]
 // --obj: instead of the built-in scenes, the triangles of FILE. Its primary rays look from the
 // centre of its bounds along the longer horizontal axis (inside an interior such as Sponza's
 // atrium), and its light rays aim at a patch spanning the middle half of the bounds' top, just
 // below it (the sky over an atrium). --embree-quality: Embree's build, high (the default: with
-// spatial splits, which clbdpt's builder does not make) or medium (binned SAH alone).
+// spatial splits) or medium (binned SAH alone). --spatial-splits: clbdpt's budget of extra
+// references for spatial splits, as a fraction of the triangles (the renderer's default
+// unless given; 0: object splits only).
 // --count-visits: after each closest-hit kind, its mean numbers of nodes visited and triangles
 // tested per ray (a second build of the kernel with counters, untimed).
 // --local: work-group size (0 = the driver's choice). --huge-pages: BVH and triangles in host
@@ -70,6 +73,7 @@ struct Options {
     bool embree = true;
     std::string embree_quality = "high";  // high: with spatial splits; medium: without
     bool count_visits = false;
+    BvhOptions bvh;
 };
 
 // ---- Scenes ---------------------------------------------------------------------------------
@@ -541,19 +545,21 @@ double agreement(const RaySet& rays, const TraceResult& a, const TraceResult& b)
 
 void run_scene(const Scene& scene, const Options& opt, DeviceContext& ctx) {
     const std::vector<Triangle>& input = scene.triangles;
-    Bvh bvh = build_bvh(input);
+    Bvh bvh = build_bvh(input, opt.bvh);
     std::vector<Triangle> tris = reorder(input, bvh.order);
-    size_t n = tris.size();
-    double bytes = double(bvh.nodes.size() * sizeof(BvhNode) + n * sizeof(Triangle));
+    size_t n = input.size();
+    double bytes = double(bvh.nodes.size() * sizeof(BvhNode) + tris.size() * sizeof(Triangle));
     std::printf("\nscene %s: %zu triangles\n", scene.name.c_str(), n);
-    std::printf("  clbdpt BVH: build %.3f s, %zu nodes, %d leaves, depth %d, stack <= %d, %.1f bytes/triangle\n",
-                bvh.build_seconds, bvh.nodes.size(), bvh.leaf_count, bvh.max_depth, bvh.max_stack, bytes / double(n));
+    std::printf("  clbdpt BVH: build %.3f s, %zu nodes, %d leaves, depth %d, stack <= %d, %.1f bytes/triangle, "
+                "%d spatial splits (%zu references, budget %.2f)\n",
+                bvh.build_seconds, bvh.nodes.size(), bvh.leaf_count, bvh.max_depth, bvh.max_stack, bytes / double(n),
+                bvh.spatial_splits, tris.size(), double(opt.bvh.spatial_split_budget));
 
     ClTracer cl_tracer(ctx, bvh, tris, opt.local, opt.huge_pages, opt.count_visits);
 #ifdef CLBDPT_HAVE_EMBREE
     std::unique_ptr<EmbreeTracer> embree;
     if (opt.embree) {
-        embree = std::make_unique<EmbreeTracer>(tris, 2, opt.embree_quality == "high");
+        embree = std::make_unique<EmbreeTracer>(input, 2, opt.embree_quality == "high");
         std::printf("  Embree BVH: build %.3f s (quality %s, 2 threads)\n", embree->build_seconds,
                     opt.embree_quality.c_str());
     }
@@ -606,7 +612,7 @@ void run_scene(const Scene& scene, const Options& opt, DeviceContext& ctx) {
     sets.push_back(random);
     sets.push_back(std::move(light));
 
-    SurfaceSampler sampler(tris);
+    SurfaceSampler sampler(input);  // each triangle once, however many references it has
     RaySet connection{"connection", true, {}, {}};
     for (long i = 0; i < opt.rays; ++i) {
         SurfacePoint a = sampler.sample(rng), b = sampler.sample(rng);
@@ -694,13 +700,15 @@ int run(int argc, char** argv) {
         else if (a == "--huge-pages") opt.huge_pages = true;
         else if (a == "--no-embree") opt.embree = false;
         else if (a == "--count-visits") opt.count_visits = true;
+        else if (a == "--spatial-splits" && next) opt.bvh.spatial_split_budget = std::stof(next), ++i;
         else if (a == "--embree-quality" && next && (std::string(next) == "high" || std::string(next) == "medium"))
             opt.embree_quality = next, ++i;
         else {
             std::fprintf(stderr,
                          "usage: traversal_bench [--triangles N] [--rays N] [--repeats K] [--local L] "
                          "[--device S] [--scene cornell|spheres|all] [--obj FILE] [--only KIND] [--huge-pages] "
-                         "[--no-embree] [--embree-quality high|medium] [--count-visits]\n");
+                         "[--no-embree] [--embree-quality high|medium] [--count-visits] "
+                         "[--spatial-splits BUDGET]\n");
             return a == "--help" || a == "-h" ? 0 : 2;
         }
     }

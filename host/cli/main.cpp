@@ -343,9 +343,10 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
     if (args.verbose)
         std::fprintf(stderr,
                      "clbdpt: device %s; scene loaded in %.3f s, device scene in %.3f s; %zu triangles, %zu BVH nodes "
-                     "(%.3f s), %zu lights, %zu textures (%.1f MiB)\n",
-                     device_names.c_str(), load_seconds, device_scene_seconds, ds.triangles.size(), ds.nodes.size(),
-                     ds.bvh_build_seconds, ds.lights.size(), ds.textures.size(), double(texture_bytes) / double(1 << 20));
+                     "and %zu triangle references (%d spatial splits; %.3f s), %zu lights, %zu textures (%.1f MiB)\n",
+                     device_names.c_str(), load_seconds, device_scene_seconds, ds.source_triangles, ds.nodes.size(),
+                     ds.triangles.size(), ds.bvh_spatial_splits, ds.bvh_build_seconds, ds.lights.size(),
+                     ds.textures.size(), double(texture_bytes) / double(1 << 20));
 
     ImageMetadata meta;
     meta.strings.push_back({"clbdpt:scene", args.scene});
@@ -556,7 +557,8 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
                                           {"samples_per_second", st.seconds > 0 ? double(d.samples) / st.seconds : 0.0},
                                           {"busy_seconds", d.busy_seconds},
                                           {"wasted_samples", d.wasted_samples}});
-        j["triangles"] = ds.triangles.size();
+        j["triangles"] = ds.source_triangles;
+        j["bvh_references"] = ds.triangles.size();
         j["load_seconds"] = load_seconds;
         j["device_scene_seconds"] = device_scene_seconds;
         j["bvh_build_seconds"] = ds.bvh_build_seconds;

@@ -140,6 +140,8 @@ DeviceScene build_device_scene(const Scene& scene, int width, int height) {
     DeviceScene ds;
     Bvh bvh = build_bvh(scene.triangles);
     ds.bvh_build_seconds = bvh.build_seconds;
+    ds.source_triangles = scene.triangles.size();
+    ds.bvh_spatial_splits = bvh.spatial_splits;
     ds.nodes = std::move(bvh.nodes);
     ds.triangles = reorder(scene.triangles, bvh.order);
     ds.infos = reorder(scene.infos, bvh.order);
@@ -189,12 +191,21 @@ DeviceScene build_device_scene(const Scene& scene, int width, int height) {
         if (it == texture_luminance.end()) it = texture_luminance.emplace(m.ke_texture, texture_mean_luminance(scene, m.ke_texture)).first;
         return it->second;
     };
-    // Area lights: one per emissive triangle (one-sided, front = counter-clockwise).
+    // Area lights: one per emissive triangle (one-sided, front = counter-clockwise). A triangle
+    // that the BVH references more than once (spatial splits) is still one light: its other
+    // copies name the same one.
+    std::vector<int> light_of_triangle(scene.triangles.size(), -1);
     for (size_t i = 0; i < ds.triangles.size(); ++i) {
         TriangleInfo& info = ds.infos[i];
         info.light = -1;
         const Material& m = ds.materials[info.material];
         if (!is_emissive(m)) continue;
+        int& light = light_of_triangle[bvh.order[i]];
+        if (light >= 0) {
+            info.light = light;
+            continue;
+        }
+        light = int(ds.lights.size());
         const Triangle& t = ds.triangles[i];
         Vec3 e1 = vec3_of(t.p1) - vec3_of(t.p0), e2 = vec3_of(t.p2) - vec3_of(t.p0);
         Light l{};

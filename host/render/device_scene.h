@@ -14,6 +14,8 @@ namespace clbdpt {
 
 struct DeviceScene {
     std::vector<BvhNode> nodes;
+    // Per BVH reference, in BVH order: a triangle cut by spatial splits appears more than once
+    // (source_triangles counts each once).
     std::vector<Triangle> triangles;
     std::vector<TriangleInfo> infos;
     std::vector<TriangleNormals> normals;
@@ -31,6 +33,8 @@ struct DeviceScene {
     Camera camera{};
     SceneInfo info{};
     double bvh_build_seconds = 0;
+    size_t source_triangles = 0;
+    int bvh_spatial_splits = 0;
     std::vector<std::string> warnings;    // one line each (render/media_nesting.h)
 };
 
