@@ -16,8 +16,8 @@
 // Large slanted triangles (arches, roofs, terrain) otherwise make boxes that overlap high in
 // the tree. The extra references are bounded by a budget (BvhOptions): the ref array has that
 // much slack at its end, and every split hands its free space on to its children in proportion
-// to their sizes, so each subtree still owns one contiguous range. The leaves are compacted at
-// the end.
+// to their sizes, so each subtree still owns one contiguous range. The collapse to wide nodes
+// then lays the leaves' triangles out in the order it writes the leaves.
 //
 // Besides the centroid on each axis, the binning also sorts triangles by size (log2 of their
 // box's area), so SAH can split large triangles off from small ones with the same centroid.
@@ -560,22 +560,7 @@ public:
         return nodes_[index].height;
     }
 
-    // Moves the leaves' refs together, in the order of their positions (depth-first, left
-    // first), and returns the triangle order.
-    std::vector<uint32_t> compact_leaves() {
-        std::vector<int> leaves;
-        for (int i = 0; i < next_.load(); ++i)
-            if (nodes_[i].count > 0) leaves.push_back(i);
-        std::sort(leaves.begin(), leaves.end(), [this](int a, int b) { return nodes_[a].first < nodes_[b].first; });
-        std::vector<uint32_t> order;
-        for (int leaf : leaves) {
-            BuildNode& node = nodes_[leaf];
-            int first = int(order.size());
-            for (int i = node.first; i < node.first + node.count; ++i) order.push_back(refs_[size_t(i)].index);
-            node.first = first;
-        }
-        return order;
-    }
+    const std::vector<PrimRef>& refs() const { return refs_; }
 
     const BuildNode* nodes() const { return nodes_.get(); }
     int node_count() const { return next_.load(); }
@@ -779,7 +764,10 @@ private:
 // build keeps height <= BVH_STACK_SIZE - 1, so the traversal stack never overflows.
 class Collapser {
 public:
-    Collapser(const BuildNode* nodes, std::vector<BvhNode>& out) : nodes_(nodes), out_(out) {}
+    // Writes the wide nodes to `out` and, as it writes each leaf, its triangles to `order`.
+    Collapser(const BuildNode* nodes, const std::vector<PrimRef>& refs, std::vector<BvhNode>& out,
+              std::vector<uint32_t>& order)
+        : nodes_(nodes), refs_(refs), out_(out), order_(order) {}
 
     void run(int triangle_count) {
         int children[BVH_WIDTH];
@@ -858,7 +846,9 @@ private:
                 node.bounds[2 * axis + 1][i] = c.hi[axis];
             }
             if (c.count > 0) {
-                node.child[i] = BVH_LEAF(c.first, c.count);
+                // The leaves' triangles are laid out in the order the leaves are written.
+                node.child[i] = BVH_LEAF(int(order_.size()), c.count);
+                for (int r = c.first; r < c.first + c.count; ++r) order_.push_back(refs_[size_t(r)].index);
                 ++leaf_count;
                 max_depth = std::max(max_depth, depth + 1);
             } else {
@@ -873,7 +863,9 @@ private:
     }
 
     const BuildNode* nodes_;
+    const std::vector<PrimRef>& refs_;
     std::vector<BvhNode>& out_;
+    std::vector<uint32_t>& order_;
 };
 
 // Fills refs [begin, end) from the triangles; returns their box and key bounds.
@@ -912,7 +904,7 @@ Bvh build_bvh(const std::vector<Triangle>& triangles, const BvhOptions& options)
     if (n > max_refs) throw Error("too many triangles for the BVH: " + std::to_string(n));
     if (n == 0) {
         // A root whose slots are all empty: every ray misses it.
-        Collapser collapser(nullptr, bvh.nodes);
+        Collapser collapser(nullptr, {}, bvh.nodes, bvh.order);
         collapser.run(0);
         bvh.build_seconds = seconds_since(start);
         return bvh;
@@ -943,11 +935,10 @@ Bvh build_bvh(const std::vector<Triangle>& triangles, const BvhOptions& options)
 
     Builder builder(triangles, refs, threads, box.half_area());
     builder.build(0, 0, int(n), int(capacity), 0, box, keys);
-    bvh.order = builder.compact_leaves();
     bvh.spatial_splits = builder.spatial_splits();
 
     bvh.nodes.reserve(size_t(builder.node_count()) / 2 + 1);
-    Collapser collapser(builder.nodes(), bvh.nodes);
+    Collapser collapser(builder.nodes(), builder.refs(), bvh.nodes, bvh.order);
     collapser.run(int(n));
     bvh.max_depth = collapser.max_depth;
     bvh.leaf_count = collapser.leaf_count;
