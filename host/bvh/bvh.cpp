@@ -591,55 +591,48 @@ private:
         return 0;
     }
 
-    Split find_split(int first, int count, int depth, const Bounds4& keys) {
-        BinMapping map(std::min(kMaxBins, std::max(kMinBins, count)), keys);
-        // find_split does not recurse, so one scratch set of bins per thread will do.
-        thread_local Bins bins;
-        bins.init(map);
-        // Near the root, where few subtrees run in parallel yet, bin on several threads.
+    // Fills `bins` (set up by init) with refs [first, first + count) through add(bins, begin,
+    // end). Near the root, where few subtrees run in parallel yet, bins on several threads,
+    // each into its own copy, merged at the end. Neither caller recurses, so one scratch set of
+    // bins per thread will do.
+    template <typename BinSet, typename Init, typename Add>
+    void bin_refs(BinSet& bins, int first, int count, int depth, const Init& init, const Add& add) {
+        init(bins);
         int threads = count >= kParallelBinning ? std::max(1, threads_ >> depth) : 1;
         if (threads > 1) {
-            std::vector<std::unique_ptr<Bins>> partial;
+            std::vector<std::unique_ptr<BinSet>> partial;
             std::vector<std::thread> pool;
             for (int t = 1; t < threads; ++t) {
-                partial.push_back(std::make_unique<Bins>());
-                partial.back()->init(map);
+                partial.push_back(std::make_unique<BinSet>());
+                init(*partial.back());
                 int begin = first + int(int64_t(count) * t / threads);
                 int end = first + int(int64_t(count) * (t + 1) / threads);
-                pool.emplace_back([this, b = partial.back().get(), begin, end] { b->add(refs_.data(), begin, end); });
+                pool.emplace_back([&add, b = partial.back().get(), begin, end] { add(*b, begin, end); });
             }
-            bins.add(refs_.data(), first, first + count / threads);
+            add(bins, first, first + count / threads);
             for (auto& th : pool) th.join();
             for (auto& p : partial) bins.merge(*p);
         } else {
-            bins.add(refs_.data(), first, first + count);
+            add(bins, first, first + count);
         }
+    }
+
+    Split find_split(int first, int count, int depth, const Bounds4& keys) {
+        BinMapping map(std::min(kMaxBins, std::max(kMinBins, count)), keys);
+        thread_local Bins bins;
+        bin_refs(
+            bins, first, count, depth, [&map](Bins& b) { b.init(map); },
+            [this](Bins& b, int begin, int end) { b.add(refs_.data(), begin, end); });
         return best_split(bins);
     }
 
     // Bins the parts of the triangles between planes (SpatialBins); returns the plane of least
-    // SAH cost. Near the root, bins on several threads, as find_split does.
+    // SAH cost.
     SpatialSplit find_spatial_split(int first, int count, int depth, const Bounds4& box) {
         thread_local SpatialBins bins;
-        bins.init(box);
-        int threads = count >= kParallelBinning ? std::max(1, threads_ >> depth) : 1;
-        if (threads > 1) {
-            std::vector<std::unique_ptr<SpatialBins>> partial;
-            std::vector<std::thread> pool;
-            for (int t = 1; t < threads; ++t) {
-                partial.push_back(std::make_unique<SpatialBins>());
-                partial.back()->init(box);
-                int begin = first + int(int64_t(count) * t / threads);
-                int end = first + int(int64_t(count) * (t + 1) / threads);
-                pool.emplace_back(
-                    [this, b = partial.back().get(), begin, end] { b->add(triangles_, refs_.data(), begin, end); });
-            }
-            bins.add(triangles_, refs_.data(), first, first + count / threads);
-            for (auto& th : pool) th.join();
-            for (auto& p : partial) bins.merge(*p);
-        } else {
-            bins.add(triangles_, refs_.data(), first, first + count);
-        }
+        bin_refs(
+            bins, first, count, depth, [&box](SpatialBins& b) { b.init(box); },
+            [this](SpatialBins& b, int begin, int end) { b.add(triangles_, refs_.data(), begin, end); });
         return bins.best_split();
     }
 
