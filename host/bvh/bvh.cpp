@@ -3,10 +3,10 @@
 // BVH_WIDTH-wide nodes (as Embree's BVH4/BVH8 builders do) and flattened depth-first into BvhNode
 // (cl/shared/types.h).
 //
-// The build works on PrimRefs (a triangle's bounds and its index), partitioned in place, so a
-// node's triangles are always a contiguous range [first, first + count) of the ref array and the
-// final triangle order is just the ref order. Binary nodes go to one array through an atomic
-// allocator, so subtrees can be built on several threads.
+// The build works on PrimRefs (a triangle's bounds, or a part's, and its index), partitioned in
+// place, so a node's triangles are always a contiguous range [first, first + count) of the ref
+// array. Binary nodes go to one array through an atomic allocator, so subtrees can be built on
+// several threads.
 //
 // Spatial splits (Stich, Friedrich & Dietrich 2009, "Spatial Splits in Bounding Volume
 // Hierarchies"; Embree's high-quality builders): where the two sides of the best object split
@@ -16,8 +16,9 @@
 // Large slanted triangles (arches, roofs, terrain) otherwise make boxes that overlap high in
 // the tree. The extra references are bounded by a budget (BvhOptions): the ref array has that
 // much slack at its end, and every split hands its free space on to its children in proportion
-// to their sizes, so each subtree still owns one contiguous range. The collapse to wide nodes
-// then lays the leaves' triangles out in the order it writes the leaves.
+// to their sizes, so each subtree still owns one contiguous range. The final triangle order is
+// the order in which the collapse to wide nodes writes the leaves (the ref order without the
+// unused slack).
 //
 // Besides the centroid on each axis, the binning also sorts triangles by size (log2 of their
 // box's area), so SAH can split large triangles off from small ones with the same centroid.
