@@ -676,13 +676,15 @@ void run_scene(const Scene& scene, const Options& opt, DeviceContext& ctx) {
     }
 }
 
-long parse_long(const char* flag, const char* value) {
+double parse_number(const char* flag, const char* value) {
     if (!value) throw Error(std::string(flag) + " needs a value");
     char* end = nullptr;
     double v = std::strtod(value, &end);
-    if (end == value || *end) throw Error(std::string("bad value for ") + flag + ": " + value);
-    return long(v);
+    if (end == value || *end || !std::isfinite(v)) throw Error(std::string("bad value for ") + flag + ": " + value);
+    return v;
 }
+
+long parse_long(const char* flag, const char* value) { return long(parse_number(flag, value)); }
 
 int run(int argc, char** argv) {
     Options opt;
@@ -700,7 +702,8 @@ int run(int argc, char** argv) {
         else if (a == "--huge-pages") opt.huge_pages = true;
         else if (a == "--no-embree") opt.embree = false;
         else if (a == "--count-visits") opt.count_visits = true;
-        else if (a == "--spatial-splits" && next) opt.bvh.spatial_split_budget = std::stof(next), ++i;
+        else if (a == "--spatial-splits")
+            opt.bvh.spatial_split_budget = float(parse_number("--spatial-splits", next)), ++i;
         else if (a == "--embree-quality" && next && (std::string(next) == "high" || std::string(next) == "medium"))
             opt.embree_quality = next, ++i;
         else {
