@@ -201,11 +201,10 @@ DeviceScene build_device_scene(const Scene& scene, int width, int height) {
         const Material& m = ds.materials[info.material];
         if (!is_emissive(m)) continue;
         int& light = light_of_triangle[bvh.order[i]];
-        if (light >= 0) {
-            info.light = light;
-            continue;
-        }
-        light = int(ds.lights.size());
+        const bool first_copy = light < 0;
+        if (first_copy) light = int(ds.lights.size());
+        info.light = light;
+        if (!first_copy) continue;
         const Triangle& t = ds.triangles[i];
         Vec3 e1 = vec3_of(t.p1) - vec3_of(t.p0), e2 = vec3_of(t.p2) - vec3_of(t.p0);
         Light l{};
@@ -213,7 +212,6 @@ DeviceScene build_device_scene(const Scene& scene, int width, int height) {
         l.triangle = int(i);
         l.emission = m.ke;
         l.area = 0.5f * length(cross(e1, e2));
-        info.light = int(ds.lights.size());
         ds.lights.push_back(l);
         powers.push_back(luminance(vec3_of(m.ke)) * emission_scale(m) * l.area * kPi);
     }
