@@ -30,6 +30,10 @@
 #define INTEGRATOR INTEGRATOR_BDPT
 #endif
 
+/* Strategy (s, t) is numbered s * STRATEGY_STRIDE + t where a kernel reports one (the first with
+ * a value that is not finite; --strategy-images' record slots): t <= MAX_DEPTH + 2. */
+#define STRATEGY_STRIDE (MAX_DEPTH + 3)
+
 typedef struct {
     float light_subpaths;  /* light subpaths per pixel sample, 0 .. 1 */
     int inner_connections; /* whether s >= 2, t >= 2 strategies are used */

@@ -516,3 +516,30 @@ inline std::string options_name(const RenderOptions& o) {
 }
 
 }  // namespace clbdpt::test
+
+namespace clbdpt::test {
+
+// The path tracer one vertex at a time (cl/path_tracer.h) against the same strategies made
+// from a stored camera subpath, as bdpt makes them (RenderOptions::pt_from_subpaths): the
+// same draws, vertex functions and order of sums give the same film bit for bit, and the same
+// number of rays. Sobol sampler, `passes` passes at max depth `max_depth`.
+inline void expect_pt_routes_agree(const DeviceScene& scene, int max_depth, int passes, const std::string& what) {
+    RenderOptions options = make_options(Integrator::Pt, max_depth, 5, SamplerKind::Sobol);
+    Renderer one_vertex_at_a_time(test_device(), scene, options);
+    Film a(scene.camera.width, scene.camera.height);
+    one_vertex_at_a_time.render_passes(a, 0, passes);
+    options.pt_from_subpaths = true;
+    Renderer from_subpaths(test_device(), scene, options);
+    Film b(scene.camera.width, scene.camera.height);
+    from_subpaths.render_passes(b, 0, passes);
+    size_t differing = 0;
+    for (size_t i = 0; i < a.camera_sum.size(); ++i) differing += a.camera_sum[i] != b.camera_sum[i];
+    EXPECT_EQ(differing, 0u) << what << ": " << differing << " of " << a.camera_sum.size() << " film values differ";
+    EXPECT_EQ(one_vertex_at_a_time.stats().rays, from_subpaths.stats().rays) << what;
+    EXPECT_EQ(one_vertex_at_a_time.stats().samples, from_subpaths.stats().samples) << what;
+    double total = 0;
+    for (double v : a.camera_sum) total += v;
+    EXPECT_GT(total, 0.0) << what << ": a black image shows nothing";
+}
+
+}  // namespace clbdpt::test

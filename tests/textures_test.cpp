@@ -234,6 +234,7 @@ TEST(Textures, CutoutsLetLightThroughInEveryRayQuery) {
     const DeviceScene b = floor_view(cutout_obj(folder, false));
     ASSERT_EQ(a.textures.size(), 1u);
     EXPECT_TRUE(has_define(a, "HAS_CUTOUTS"));
+    expect_pt_routes_agree(a, 3, 4, "cut-out");
 
     // Tolerance: 16 regions + the image mean per integrator, 4.5 combined standard errors.
     const int passes = scaled_passes(48);
@@ -263,6 +264,7 @@ TEST(Textures, BdptPtLtAgreeUnderATexturedEmitter) {
     const DeviceScene ds = floor_view(obj);
     EXPECT_TRUE(has_define(ds, "HAS_EMISSION_TEXTURES"));
     expect_integrators_agree(ds, 41, "emission map");
+    expect_pt_routes_agree(ds, 3, 4, "emission map");
 }
 
 // ---- Normal maps ------------------------------------------------------------------------
@@ -295,6 +297,7 @@ TEST(Textures, BdptPtLtAgreeOnANormalMappedFloor) {
     EXPECT_TRUE(has_define(ds, "HAS_BUMP_MAPS"));
     EXPECT_TRUE(has_define(ds, "HAS_SHADING_NORMALS"));
     expect_integrators_agree(ds, 21, "normal map");
+    expect_pt_routes_agree(ds, 3, 4, "normal map");
 }
 
 // ---- Specialisation ---------------------------------------------------------------------

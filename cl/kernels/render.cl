@@ -18,6 +18,17 @@
 #define MAX_DEPTH 5
 #endif
 
+/* The path tracer makes its connections as its one subpath grows (cl/path_tracer.h), except
+ * where it would need more than two vertices at hand: media (a connection's transmittance and
+ * distance densities), per-strategy images, and PT_FROM_SUBPATHS (tests and benchmarks: the
+ * generic route below, to compare with). */
+#if INTEGRATOR == INTEGRATOR_PT && !defined(HAS_MEDIA) && !defined(STRATEGY_IMAGES) && !defined(PT_FROM_SUBPATHS)
+#define PT_ONE_VERTEX_AT_A_TIME 1
+#include "path_tracer.h"
+#else
+#define PT_ONE_VERTEX_AT_A_TIME 0
+#endif
+
 /* Splat records per item: one per light subpath vertex. A path tracer has no t = 1 strategy,
  * so nothing of its lands elsewhere: it has none (the host sizes the buffer the same way). */
 #if INTEGRATOR == INTEGRATOR_PT
@@ -28,7 +39,6 @@
 
 /* --strategy-images: every (s, t) contribution is also recorded in its own slot
  * s * STRATEGY_STRIDE + t (own pixel for t > 1, the splat's for t = 1). */
-#define STRATEGY_STRIDE (MAX_DEPTH + 3)
 #define STRATEGY_SLOTS ((MAX_DEPTH + 2) * STRATEGY_STRIDE)
 
 __kernel void render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, __global float4* camera_out,
@@ -57,6 +67,17 @@ __kernel void render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, __global float
 #endif
     rng_seek(&position_rng, SAMPLE_DRAW_PIXEL);
     float2 raster = (float2)((float)px, (float)py) + rng_next2(&position_rng);
+#if PT_ONE_VERTEX_AT_A_TIME
+    PathTracerSum sum;
+    sum.L = (float3)(0.0f);
+    sum.bad_strategy = -1;
+#ifdef DEBUG_NAN_PIXEL
+    sum.poisoned = pixel == DEBUG_NAN_PIXEL && params.sample_index == 0;
+#endif
+    path_tracer_sample(&scene, &rng, raster, &sum);
+    camera_out[gid] = (float4)(sum.L.x, sum.L.y, sum.L.z,
+                               sum.bad_strategy < 0 ? (float)rays_traced : -1.0f - (float)sum.bad_strategy);
+#else
     StrategyMix mix;
     mix.light_subpaths = params.light_subpaths;
     mix.inner_connections = params.inner_connections;
@@ -141,4 +162,5 @@ __kernel void render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, __global float
         }
     }
     camera_out[gid] = (float4)(L.x, L.y, L.z, bad_strategy < 0 ? (float)rays_traced : -1.0f - (float)bad_strategy);
+#endif
 }

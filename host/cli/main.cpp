@@ -67,6 +67,7 @@ struct RenderArgs {
     std::string resume;             // --resume FILE
     std::string debug_exit_process; // hidden: "R:N", MPI process R ends abruptly after N runs
     std::string debug_slow_device;  // hidden: "K:F", device K runs F times slower (benchmarks)
+    bool debug_pt_from_subpaths = false;  // hidden: the generic path tracer (benchmarks)
 };
 
 // Applies the command line's camera overrides. Where the scene's camera was automatic and only
@@ -306,6 +307,7 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
     // out, counted, and reported at the end (with exit status 1).
     options.drop_non_finite = true;
     options.debug_nan_pixel = args.debug_nan_pixel;
+    options.pt_from_subpaths = args.debug_pt_from_subpaths;
     options.all_features = args.all_features;
     options.local_size = args.local_size;
     options.batch_items = args.batch_items;
@@ -710,6 +712,9 @@ int main(int argc, char** argv) {
     render->add_option("--debug-exit-process", args.debug_exit_process)->group("");
     // Benchmarks only: device K runs F times slower (it waits after each launch).
     render->add_option("--debug-slow-device", args.debug_slow_device)->group("");
+    // Benchmarks only: pt made from stored subpaths, the way bdpt makes its strategies
+    // (cl/kernels/render.cl), instead of one vertex at a time; the same image.
+    render->add_flag("--debug-pt-from-subpaths", args.debug_pt_from_subpaths)->group("");
 
     try {
         app.parse(argc, argv);

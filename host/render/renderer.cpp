@@ -54,6 +54,7 @@ Renderer::Renderer(DeviceContext& device, const DeviceScene& scene, const Render
             stats_.defines.push_back("STRATEGY_IMAGES_UNWEIGHTED");
         strategy_slots_ = (options.max_depth + 2) * (options.max_depth + 3);
     }
+    if (options.pt_from_subpaths && options.integrator == Integrator::Pt) stats_.defines.push_back("PT_FROM_SUBPATHS");
     if (options.debug_nan_pixel >= 0) stats_.defines.push_back("DEBUG_NAN_PIXEL=" + std::to_string(options.debug_nan_pixel));
     const ProgramBuild& build = device.program("kernels/render.cl", stats_.defines);
     stats_.build_seconds = build.seconds;

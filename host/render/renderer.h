@@ -39,6 +39,10 @@ struct RenderOptions {
     // it; with drop_non_finite the sample (its pixel value and its splats) is left out and
     // counted in RenderStats instead, so a long render survives it (the command line).
     bool drop_non_finite = false;
+    // Tests and benchmarks only: the path tracer built as bdpt builds its strategies, from a
+    // stored camera subpath (cl/kernels/render.cl, PT_FROM_SUBPATHS), instead of one vertex at
+    // a time. The two give the same image up to float rounding.
+    bool pt_from_subpaths = false;
     // Tests only: pixel whose sample 0 gets a NaN contribution (-1: none).
     int debug_nan_pixel = -1;
     // Tests only: launches after which this renderer's launches fail, as a driver's would

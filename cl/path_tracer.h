@@ -1,0 +1,150 @@
+/* The path tracer (INTEGRATOR_PT) one vertex at a time: the strategies s <= 1 of cl/connect.h,
+ * made as the camera subpath grows instead of after it is stored.
+ *
+ * A path tracer's strategies need at most the vertex just found and the one before it: s = 0
+ * reads the emitter's forward density and its predecessor's position (the MIS ratio to s = 1
+ * through it), s = 1 samples a light point from the newest vertex. So the walk keeps two
+ * vertices, not the MAX_DEPTH + 2 of a stored subpath, and makes each connection as soon as its
+ * vertex exists (the same order as the generic kernel's t-major loop over (s, t), so the sums
+ * are made in the same order).
+ *
+ * It computes what the generic route computes (cl/walk.h random_walk, cl/connect.h
+ * connect_bdpt, cl/mis.h mis_weight with STRATEGY_MAX_LIGHT_VERTICES = 1), from the same draws
+ * and the same vertex functions, so its images equal that route's; tests/path_tracer_test.cpp
+ * compares the two (PT_FROM_SUBPATHS builds the generic one). What it leaves out:
+ *   - the densities mis_weight computes and then does not use (the ratio through a direct hit
+ *     seen from the camera, or through a delta vertex);
+ *   - the weight recursions themselves: with one light vertex at most, each weight is one
+ *     ratio (below);
+ *   - the stored subpath, its copies into mis_weight, and the loops over (s, t) pairs that
+ *     a path tracer's strategy set rules out.
+ * Scenes with media and --strategy-images keep the generic route (render.cl). */
+#ifndef CLBDPT_PATH_TRACER_H
+#define CLBDPT_PATH_TRACER_H
+
+#include "mis.h"
+#include "walk.h"
+
+/* A sample's weighted sum, and the first strategy that gave a value that is not finite
+ * (s * STRATEGY_STRIDE + t; -1: none). */
+typedef struct {
+    float3 L;
+    int bad_strategy;
+#ifdef DEBUG_NAN_PIXEL
+    int poisoned; /* tests: every contribution of this sample is made NaN */
+#endif
+} PathTracerSum;
+
+inline void path_tracer_add(PathTracerSum* sum, float3 c, int s, int t) {
+#ifdef DEBUG_NAN_PIXEL
+    if (sum->poisoned && !is_black(c)) c = (float3)(NAN);
+#endif
+    /* NaN or Inf in any channel makes the difference NaN. */
+    float probe = c.x + c.y + c.z;
+    if (probe - probe != 0.0f && sum->bad_strategy < 0) sum->bad_strategy = s * STRATEGY_STRIDE + t;
+    sum->L += c;
+}
+
+/* s = 0, the path's t-th vertex v (t >= 2) is an emitter: its radiance toward prev, weighted
+ * against s = 1 at v, the light point that a light sample from prev could have picked (pbrt-v3
+ * MISWeight with one ratio: p_1 / p_0 = the light's origin density over v's BSDF-sampled area
+ * density). s = 1 cannot reach v from the camera vertex (t = 2: (1, 1) is no pt strategy) nor
+ * through a delta vertex: the weight is then 1. */
+inline float3 path_tracer_emitter_hit(const SceneData* scene, const PathVertex* prev, const PathVertex* v, int t) {
+    float3 L = vertex_le(scene, v, prev) * v->beta;
+    if (is_black(L) || t < 3 || prev->delta) return L;
+    float pdf_light = vertex_pdf_light_origin(scene, v, prev);
+    float ratio = mis_ratio(pdf_light, 0, v->pdf_fwd, 0);
+    return L * (1.0f / (1.0f + ratio));
+}
+
+/* s = 1 at the path's t-th vertex v (t >= 2): a light point sampled from v, joined to it, weighted
+ * against s = 0 (the same path found by sampling v's BSDF toward the light point; p_0 / p_1 = its
+ * area density over the light's origin density, 0 ratio for a delta light). */
+inline float3 path_tracer_light_sample(const SceneData* scene, Rng* rng, const PathVertex* prev, const PathVertex* v,
+                                       int t) {
+    float3 L = (float3)(0.0f);
+    rng_seek(rng, sample_draw_light_connection(t));
+    float u_light = rng_next(rng);
+    float2 u = rng_next2(rng);
+    if (!vertex_is_connectible(scene, v) || scene->info.light_count == 0) return L;
+    float select_pdf;
+    int light = sample_light_index(scene, u_light, &select_pdf);
+    LightSample ls;
+    if (!light_sample_li(scene, light, v->p, u, &ls)) return L;
+    PathVertex sampled = vertex_at(VERTEX_LIGHT, ls.p, ls.n, ls.p_error);
+    sampled.beta = ls.li / (ls.pdf_w * select_pdf);
+    sampled.light = light;
+    sampled.pdf_fwd = vertex_pdf_light_origin(scene, &sampled, v);
+    L = v->beta * vertex_f(scene, v, &sampled, TRANSPORT_RADIANCE) * sampled.beta;
+    if (vertex_on_surface(v)) L *= fabs(dot(ls.wi, v->ns));
+    if (is_black(L) || !vertices_visible(scene, v, &sampled)) return (float3)(0.0f);
+    if (vertex_is_delta_light(scene, &sampled)) return L;
+    float pdf_bsdf = vertex_pdf(scene, v, prev, &sampled);
+    float ratio = mis_ratio(pdf_bsdf, 0, sampled.pdf_fwd, 0);
+    return L * (1.0f / (1.0f + ratio));
+}
+
+/* One path tracer sample through raster position `raster`: the camera subpath of cl/walk.h
+ * (generate_camera_subpath, random_walk in radiance mode) with its s = 0 and s = 1
+ * connections made at each vertex, added into *sum (L 0 and bad_strategy -1 on entry). */
+inline void path_tracer_sample(const SceneData* scene, Rng* rng, float2 raster, PathTracerSum* sum) {
+    float3 o, d;
+    rng_seek(rng, SAMPLE_DRAW_LENS);
+    float2 u_lens = rng_next2(rng);
+    camera_generate_ray(&scene->camera, raster, u_lens, &o, &d);
+    float pdf_pos, pdf_fwd;
+    camera_pdf_we(&scene->camera, o, d, &pdf_pos, &pdf_fwd);
+    if (pdf_fwd == 0.0f) return;
+    PathVertex prev = vertex_at(VERTEX_CAMERA, o, (float3)(0.0f), 0.0f);
+    prev.beta = (float3)(1.0f);
+    float3 beta = prev.beta;
+    /* Vertex i of the camera subpath (the camera is vertex 0), so its strategies have t = i + 1
+     * camera vertices; the last, i = MAX_DEPTH + 1, can only be an emitter hit (s = 0). */
+    for (int i = 1; i <= MAX_DEPTH + 1 && !is_black(beta); ++i) {
+        PathVertex v;
+        Hit hit;
+        ++*scene->rays_traced;
+        if (intersect(scene->nodes, scene->triangles, &scene->cutouts, o, d, INFINITY, &hit)) {
+            surface_vertex_from_hit(scene, &prev, &hit, &v);
+        } else {
+#ifdef HAS_ENVIRONMENT
+            /* An escaped ray ends on the environment light (seed ch. 6; as random_walk). */
+            if (scene->info.environment_light < 0) break;
+            v = vertex_at(VERTEX_LIGHT, prev.p + d * (2.0f * scene_radius(scene)), (float3)(0.0f), 0.0f);
+            v.wo = -d;
+            v.light = scene->info.environment_light;
+#else
+            break;
+#endif
+        }
+        v.beta = beta;
+        /* The forward density from the positions, as random_walk (cl/walk.h says why). */
+        if (i > 1 && !prev.delta) pdf_fwd = vertex_scatter_pdf(scene, &prev, prev.wo, normalize(v.p - prev.p));
+        v.pdf_fwd = convert_density(scene, &prev, pdf_fwd, &v);
+
+        int t = i + 1;
+        if (vertex_is_light(&v)) path_tracer_add(sum, path_tracer_emitter_hit(scene, &prev, &v, t), 0, t);
+        if (v.type == VERTEX_LIGHT || i == MAX_DEPTH + 1) break;
+        path_tracer_add(sum, path_tracer_light_sample(scene, rng, &prev, &v, t), 1, t);
+
+        rng_seek(rng, sample_draw_camera_bounce(i - 1));
+        float u_lobe = rng_next(rng);
+        float2 u_dir = rng_next2(rng);
+        Bsdf b = vertex_bsdf(scene, &v);
+        BsdfSample bs;
+        if (!bsdf_sample(&b, v.wo, (float3)(u_lobe, u_dir.x, u_dir.y), TRANSPORT_RADIANCE, &bs) || is_black(bs.f)) break;
+        pdf_fwd = bs.pdf;
+        beta *= bs.f * (fabs(dot(bs.wi, v.ns)) / bs.pdf);
+        if (bs.specular) {
+            /* A delta lobe has no density to compare with (seed 5.4.2). */
+            v.delta = 1;
+            pdf_fwd = 0.0f;
+        }
+        o = offset_ray_origin(v.p, v.ng, v.p_error, bs.wi);
+        d = bs.wi;
+        prev = v;
+    }
+}
+
+#endif
