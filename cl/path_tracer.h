@@ -58,15 +58,12 @@ inline float3 path_tracer_emitter_hit(const SceneData* scene, const PathVertex* 
     return L * (1.0f / (1.0f + ratio));
 }
 
-/* s = 1 at the path's t-th vertex v (t >= 2): a light point sampled from v, joined to it, weighted
+/* s = 1 at the path's vertex v: a light point sampled from v (draws u_light, u), joined to it, weighted
  * against s = 0 (the same path found by sampling v's BSDF toward the light point; p_0 / p_1 = its
  * area density over the light's origin density, 0 ratio for a delta light). */
-inline float3 path_tracer_light_sample(const SceneData* scene, Rng* rng, const PathVertex* prev, const PathVertex* v,
-                                       int t) {
+inline float3 path_tracer_light_sample(const SceneData* scene, float u_light, float2 u, const PathVertex* prev,
+                                       const PathVertex* v) {
     float3 L = (float3)(0.0f);
-    rng_seek(rng, sample_draw_light_connection(t));
-    float u_light = rng_next(rng);
-    float2 u = rng_next2(rng);
     if (!vertex_is_connectible(scene, v) || scene->info.light_count == 0) return L;
     float select_pdf;
     int light = sample_light_index(scene, u_light, &select_pdf);
@@ -126,14 +123,16 @@ inline void path_tracer_sample(const SceneData* scene, Rng* rng, float2 raster, 
         int t = i + 1;
         if (vertex_is_light(&v)) path_tracer_add(sum, path_tracer_emitter_hit(scene, &prev, &v, t), 0, t);
         if (v.type == VERTEX_LIGHT || i == MAX_DEPTH + 1) break;
-        path_tracer_add(sum, path_tracer_light_sample(scene, rng, &prev, &v, t), 1, t);
+        /* The vertex's draws (cl/sample_dimensions.h), all four at once: the light point's
+         * (choice, point) for s = 1 and the bounce's (lobe, direction). */
+        uint light_draw = sample_draw_light_connection(t), bounce_draw = sample_draw_camera_bounce(i - 1);
+        float4 ux, uy;
+        rng_draws4(rng, (uint4)(light_draw, light_draw + 1u, bounce_draw, bounce_draw + 1u), &ux, &uy);
+        path_tracer_add(sum, path_tracer_light_sample(scene, ux.s0, (float2)(ux.s1, uy.s1), &prev, &v), 1, t);
 
-        rng_seek(rng, sample_draw_camera_bounce(i - 1));
-        float u_lobe = rng_next(rng);
-        float2 u_dir = rng_next2(rng);
         Bsdf b = vertex_bsdf(scene, &v);
         BsdfSample bs;
-        if (!bsdf_sample(&b, v.wo, (float3)(u_lobe, u_dir.x, u_dir.y), TRANSPORT_RADIANCE, &bs) || is_black(bs.f)) break;
+        if (!bsdf_sample(&b, v.wo, (float3)(ux.s2, ux.s3, uy.s3), TRANSPORT_RADIANCE, &bs) || is_black(bs.f)) break;
         pdf_fwd = bs.pdf;
         beta *= bs.f * (fabs(dot(bs.wi, v.ns)) / bs.pdf);
         if (bs.specular) {

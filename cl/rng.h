@@ -16,13 +16,18 @@
 #ifndef CLBDPT_RNG_H
 #define CLBDPT_RNG_H
 
+/* The integer steps below are written once as statement macros and used on one value and on
+ * four lanes (rng_draws4, which computes four draws in one SIMD pass). */
+
 /* "lowbias32" integer hash (C. Wellons, hash-prospector): a full-avalanche 32-bit permutation. */
+#define HASH_U32_STEPS(x) \
+    x ^= x >> 16;         \
+    x *= 0x7feb352du;     \
+    x ^= x >> 15;         \
+    x *= 0x846ca68bu;     \
+    x ^= x >> 16
 inline uint hash_u32(uint x) {
-    x ^= x >> 16;
-    x *= 0x7feb352du;
-    x ^= x >> 15;
-    x *= 0x846ca68bu;
-    x ^= x >> 16;
+    HASH_U32_STEPS(x);
     return x;
 }
 
@@ -34,15 +39,18 @@ inline uint hash_u32(uint x) {
 #endif
 #endif
 
+#define REVERSE_BITS_STEPS(x)                                        \
+    x = ((x >> 1) & 0x55555555u) | ((x & 0x55555555u) << 1);       \
+    x = ((x >> 2) & 0x33333333u) | ((x & 0x33333333u) << 2);       \
+    x = ((x >> 4) & 0x0f0f0f0fu) | ((x & 0x0f0f0f0fu) << 4);       \
+    x = ((x >> 8) & 0x00ff00ffu) | ((x & 0x00ff00ffu) << 8);       \
+    x = (x >> 16) | (x << 16)
 inline uint reverse_bits(uint x) {
 #ifdef CLBDPT_HAS_BITREVERSE
     return __builtin_bitreverse32(x);
 #else
-    x = ((x >> 1) & 0x55555555u) | ((x & 0x55555555u) << 1);
-    x = ((x >> 2) & 0x33333333u) | ((x & 0x33333333u) << 2);
-    x = ((x >> 4) & 0x0f0f0f0fu) | ((x & 0x0f0f0f0fu) << 4);
-    x = ((x >> 8) & 0x00ff00ffu) | ((x & 0x00ff00ffu) << 8);
-    return (x >> 16) | (x << 16);
+    REVERSE_BITS_STEPS(x);
+    return x;
 #endif
 }
 
@@ -83,12 +91,14 @@ inline float bits_to_unit_float(uint bits) { return (float)(bits >> 8) * (1.0f /
  * the input bits below it (Laine-Karras style; constants from pbrt-v4's FastOwenScrambler).
  * Applied to a bit-reversed value it flips each digit of the binary fraction depending only on
  * the digits before it, which is Owen scrambling. */
+#define OWEN_HASH_STEPS(v, seed) \
+    v ^= v * 0x3d20adeau;        \
+    v += seed;                   \
+    v *= (seed >> 16) | 1u;      \
+    v ^= v * 0x05526c56u;        \
+    v ^= v * 0x53a22864u
 inline uint owen_hash(uint v, uint seed) {
-    v ^= v * 0x3d20adeau;
-    v += seed;
-    v *= (seed >> 16) | 1u;
-    v ^= v * 0x05526c56u;
-    v ^= v * 0x53a22864u;
+    OWEN_HASH_STEPS(v, seed);
     return v;
 }
 
@@ -101,13 +111,15 @@ inline uint owen_scramble_reversed(uint v_reversed, uint seed) { return reverse_
  * row j of the product is the parity of the index bits k that are supersets of j, a subset-sum
  * (zeta) transform over 5-bit positions: five shift-and-xor steps instead of a loop over the
  * index's set bits. */
+#define SOBOL_DIMENSION1_REVERSED_STEPS(y) \
+    y ^= (y >> 1) & 0x55555555u;           \
+    y ^= (y >> 2) & 0x33333333u;           \
+    y ^= (y >> 4) & 0x0f0f0f0fu;           \
+    y ^= (y >> 8) & 0x00ff00ffu;           \
+    y ^= (y >> 16) & 0x0000ffffu
 inline uint sobol_dimension1_reversed(uint index) {
     uint y = index;
-    y ^= (y >> 1) & 0x55555555u;
-    y ^= (y >> 2) & 0x33333333u;
-    y ^= (y >> 4) & 0x0f0f0f0fu;
-    y ^= (y >> 8) & 0x00ff00ffu;
-    y ^= (y >> 16) & 0x0000ffffu;
+    SOBOL_DIMENSION1_REVERSED_STEPS(y);
     return y;
 }
 #endif
@@ -130,6 +142,40 @@ __attribute__((always_inline)) inline float2 rng_next2(Rng* rng) {
     uint x = reverse_bits(owen_hash(index, hash_u32(seed ^ 0xa511e9b3u)));
     uint y = reverse_bits(owen_hash(sobol_dimension1_reversed(index), hash_u32(seed ^ 0x63d83595u)));
     return (float2)(bits_to_unit_float(x), bits_to_unit_float(y));
+}
+
+inline uint4 reverse_bits4(uint4 x) {
+#ifdef CLBDPT_HAS_BITREVERSE
+    return (uint4)(__builtin_bitreverse32(x.s0), __builtin_bitreverse32(x.s1), __builtin_bitreverse32(x.s2),
+                   __builtin_bitreverse32(x.s3));
+#else
+    REVERSE_BITS_STEPS(x);
+    return x;
+#endif
+}
+
+inline float4 bits_to_unit_float4(uint4 bits) { return convert_float4(bits >> 8) * (1.0f / 16777216.0f); }
+
+/* Four draws at once: lane k of *x and *y are rng_next2's two values at draw draws[k] (and *x's
+ * alone rng_next's). The same integer steps as one draw, run over four lanes: a Sobol draw is
+ * mostly hashing, and SIMD does four of them for about the price of one. */
+__attribute__((always_inline)) inline void rng_draws4(const Rng* rng, uint4 draws, float4* x, float4* y) {
+    uint4 inner = draws + 0x632be5abu;
+    HASH_U32_STEPS(inner);
+    uint4 seed = (uint4)(rng->key) ^ inner;
+    HASH_U32_STEPS(seed);
+    uint4 index = (uint4)(rng->sample_index_reversed);
+    OWEN_HASH_STEPS(index, seed);
+    index = reverse_bits4(index);
+    uint4 seed_x = seed ^ 0xa511e9b3u, seed_y = seed ^ 0x63d83595u;
+    HASH_U32_STEPS(seed_x);
+    HASH_U32_STEPS(seed_y);
+    uint4 vx = index, vy = index;
+    SOBOL_DIMENSION1_REVERSED_STEPS(vy);
+    OWEN_HASH_STEPS(vx, seed_x);
+    OWEN_HASH_STEPS(vy, seed_y);
+    *x = bits_to_unit_float4(reverse_bits4(vx));
+    *y = bits_to_unit_float4(reverse_bits4(vy));
 }
 
 #elif defined(SAMPLER_ZSOBOL)
@@ -229,6 +275,23 @@ inline float2 rng_next2(Rng* rng) {
     return (float2)(independent_value(rng, draw, 0u), independent_value(rng, draw, 1u));
 }
 
+#endif
+
+#ifndef SAMPLER_SOBOL
+/* rng_draws4 (above) draw by draw. */
+inline void rng_draws4(const Rng* rng, uint4 draws, float4* x, float4* y) {
+    Rng r = *rng;
+    uint d[4] = {draws.s0, draws.s1, draws.s2, draws.s3};
+    float v[2][4];
+    for (int k = 0; k < 4; ++k) {
+        r.dimension = d[k];
+        float2 u = rng_next2(&r);
+        v[0][k] = u.x;
+        v[1][k] = u.y;
+    }
+    *x = (float4)(v[0][0], v[0][1], v[0][2], v[0][3]);
+    *y = (float4)(v[1][0], v[1][1], v[1][2], v[1][3]);
+}
 #endif
 
 /* Values beyond the sample vector, for decisions whose number has no bound (a ray through a
