@@ -56,10 +56,10 @@ inline float3 connect_bdpt(const SceneData* scene, const StrategyMix* mix, Rng* 
         if (!vertex_is_connectible(scene, qs)) return L;
         float3 lens_point, wi;
         float pdf_w;
-        float we = camera_sample_wi(&scene->camera, qs->p, u, &lens_point, &wi, &pdf_w, raster);
+        float we = camera_sample_wi(scene->camera, qs->p, u, &lens_point, &wi, &pdf_w, raster);
         if (pdf_w > 0.0f && we > 0.0f) {
             /* The lens is no scene surface: nothing to offset its point from. */
-            sampled = vertex_at(VERTEX_CAMERA, lens_point, xyz(scene->camera.forward), 0.0f);
+            sampled = vertex_at(VERTEX_CAMERA, lens_point, xyz(scene->camera->forward), 0.0f);
             sampled.beta = (float3)(we / pdf_w);
             L = qs->beta * vertex_f(scene, qs, &sampled, TRANSPORT_IMPORTANCE) * sampled.beta;
             if (vertex_on_surface(qs)) L *= fabs(dot(wi, qs->ns));
@@ -70,7 +70,7 @@ inline float3 connect_bdpt(const SceneData* scene, const StrategyMix* mix, Rng* 
         rng_seek(rng, sample_draw_light_connection(t));
         float u_light = rng_next(rng);
         float2 u = rng_next2(rng);
-        if (!vertex_is_connectible(scene, pt) || scene->info.light_count == 0) return L;
+        if (!vertex_is_connectible(scene, pt) || scene->info->light_count == 0) return L;
         float select_pdf;
         int light = sample_light_index(scene, u_light, &select_pdf);
         LightSample ls;

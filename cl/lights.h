@@ -17,7 +17,7 @@
 /* ---- Selection ------------------------------------------------------------------------- */
 
 inline int sample_light_index(const SceneData* scene, float u, float* select_pdf) {
-    int i = find_interval(scene->light_cdf, scene->info.light_count, u);
+    int i = find_interval(scene->light_cdf, scene->info->light_count, u);
     *select_pdf = scene->lights[i].select_pdf;
     return i;
 }
@@ -105,7 +105,7 @@ inline float3 env_direction(float2 uv) {
 inline float2 env_uv(float3 w) { return (float2)(atan2_turns(w.z, w.x), acos_half_turns(w.y)); }
 
 inline int env_texel(const SceneData* scene, float2 uv) {
-    int w = scene->info.env_width, h = scene->info.env_height;
+    int w = scene->info->env_width, h = scene->info->env_height;
     int x = min((int)(uv.x * (float)w), w - 1);
     int y = min((int)(uv.y * (float)h), h - 1);
     return y * w + x;
@@ -113,7 +113,7 @@ inline int env_texel(const SceneData* scene, float2 uv) {
 
 /* Radiance arriving from direction w (unit, pointing away from the scene). */
 inline float3 environment_radiance(const SceneData* scene, float3 w) {
-    __global const Light* light = &scene->lights[scene->info.environment_light];
+    __global const Light* light = &scene->lights[scene->info->environment_light];
     float3 scale = xyz(light->emission);
 #ifdef HAS_ENVIRONMENT_MAP
     return scale * xyz(scene->env_texels[env_texel(scene, env_uv(w))]);
@@ -125,7 +125,7 @@ inline float3 environment_radiance(const SceneData* scene, float3 w) {
 /* Solid-angle density with which the environment light samples direction w. */
 inline float environment_pdf_w(const SceneData* scene, float3 w) {
 #ifdef HAS_ENVIRONMENT_MAP
-    int width = scene->info.env_width, height = scene->info.env_height;
+    int width = scene->info->env_width, height = scene->info->env_height;
     __global const float* func = scene->env_distribution;
     float integral = func[width * height + height * (width + 1) + height + 1];
     float2 uv = env_uv(w);
@@ -140,9 +140,9 @@ inline float environment_pdf_w(const SceneData* scene, float3 w) {
 /* Samples a direction toward the environment; returns it with its solid-angle density and the
  * radiance arriving from it (the sampled texel's: no mapping back from the direction). */
 inline float3 environment_sample_direction(const SceneData* scene, float2 u, float* pdf_w, float3* radiance) {
-    __global const Light* light = &scene->lights[scene->info.environment_light];
+    __global const Light* light = &scene->lights[scene->info->environment_light];
 #ifdef HAS_ENVIRONMENT_MAP
-    int width = scene->info.env_width, height = scene->info.env_height;
+    int width = scene->info->env_width, height = scene->info->env_height;
     __global const float* func = scene->env_distribution;
     __global const float* cond = func + width * height;
     __global const float* marg = cond + height * (width + 1);

@@ -241,7 +241,7 @@ inline int trace_through_media(const SceneData* scene, const Rng* rng, uint stre
 inline int vertex_medium_toward(const SceneData* scene, const PathVertex* v, float3 w) {
     switch (v->type) {
     case VERTEX_MEDIUM: return v->medium;
-    case VERTEX_CAMERA: return scene->info.camera_medium;
+    case VERTEX_CAMERA: return scene->info->camera_medium;
     case VERTEX_LIGHT: {
         __global const Light* light = &scene->lights[v->light];
         if (light->kind != LIGHT_AREA) return light->medium; /* vacuum for infinite lights */

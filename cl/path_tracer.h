@@ -64,7 +64,7 @@ inline float3 path_tracer_emitter_hit(const SceneData* scene, const PathVertex* 
 inline float3 path_tracer_light_sample(const SceneData* scene, float u_light, float2 u, const PathVertex* prev,
                                        const PathVertex* v) {
     float3 L = (float3)(0.0f);
-    if (!vertex_is_connectible(scene, v) || scene->info.light_count == 0) return L;
+    if (!vertex_is_connectible(scene, v) || scene->info->light_count == 0) return L;
     float select_pdf;
     int light = sample_light_index(scene, u_light, &select_pdf);
     LightSample ls;
@@ -89,9 +89,9 @@ inline void path_tracer_sample(const SceneData* scene, Rng* rng, float2 raster, 
     float3 o, d;
     rng_seek(rng, SAMPLE_DRAW_LENS);
     float2 u_lens = rng_next2(rng);
-    camera_generate_ray(&scene->camera, raster, u_lens, &o, &d);
+    camera_generate_ray(scene->camera, raster, u_lens, &o, &d);
     float pdf_pos, pdf_fwd;
-    camera_pdf_we(&scene->camera, o, d, &pdf_pos, &pdf_fwd);
+    camera_pdf_we(scene->camera, o, d, &pdf_pos, &pdf_fwd);
     if (pdf_fwd == 0.0f) return;
     PathVertex prev = vertex_at(VERTEX_CAMERA, o, (float3)(0.0f), 0.0f);
     prev.beta = (float3)(1.0f);
@@ -107,10 +107,10 @@ inline void path_tracer_sample(const SceneData* scene, Rng* rng, float2 raster, 
         } else {
 #ifdef HAS_ENVIRONMENT
             /* An escaped ray ends on the environment light (seed ch. 6; as random_walk). */
-            if (scene->info.environment_light < 0) break;
+            if (scene->info->environment_light < 0) break;
             v = vertex_at(VERTEX_LIGHT, prev.p + d * (2.0f * scene_radius(scene)), (float3)(0.0f), 0.0f);
             v.wo = -d;
-            v.light = scene->info.environment_light;
+            v.light = scene->info->environment_light;
 #else
             break;
 #endif

@@ -234,7 +234,7 @@ inline float3 vertex_le(const SceneData* scene, const PathVertex* v, const PathV
  * probability; w points from the light into the scene (pbrt InfiniteLightDensity). */
 inline float infinite_light_density(const SceneData* scene, float3 w) {
 #ifdef HAS_ENVIRONMENT
-    int env = scene->info.environment_light;
+    int env = scene->info->environment_light;
     if (env < 0) return 0.0f;
     return scene->lights[env].select_pdf * environment_pdf_w(scene, -w);
 #else
@@ -290,7 +290,7 @@ inline float vertex_pdf(const SceneData* scene, const PathVertex* v, const PathV
     float pdf_w;
     if (v->type == VERTEX_CAMERA) {
         float pdf_pos;
-        camera_pdf_we(&scene->camera, v->p, wn, &pdf_pos, &pdf_w);
+        camera_pdf_we(scene->camera, v->p, wn, &pdf_pos, &pdf_w);
     } else {
         float3 wp = prev->p - v->p;
         float dp2 = length_squared(wp);

@@ -99,10 +99,10 @@ inline int random_walk(const SceneData* scene, Rng* rng, float3 o, float3 d, flo
 #ifdef HAS_ENVIRONMENT
             /* An escaped camera ray ends on the environment light (seed ch. 6); its density
              * stays in solid angle. */
-            if (mode != TRANSPORT_RADIANCE || scene->info.environment_light < 0) break;
+            if (mode != TRANSPORT_RADIANCE || scene->info->environment_light < 0) break;
             *vertex = vertex_at(VERTEX_LIGHT, prev->p + d * (2.0f * scene_radius(scene)), (float3)(0.0f), 0.0f);
             vertex->wo = -d;
-            vertex->light = scene->info.environment_light;
+            vertex->light = scene->info->environment_light;
 #else
             break;
 #endif
@@ -183,9 +183,9 @@ inline int generate_camera_subpath(const SceneData* scene, Rng* rng, float2 rast
     float3 o, d;
     rng_seek(rng, SAMPLE_DRAW_LENS);
     float2 u_lens = rng_next2(rng);
-    camera_generate_ray(&scene->camera, raster, u_lens, &o, &d);
+    camera_generate_ray(scene->camera, raster, u_lens, &o, &d);
     float pdf_pos, pdf_dir;
-    camera_pdf_we(&scene->camera, o, d, &pdf_pos, &pdf_dir);
+    camera_pdf_we(scene->camera, o, d, &pdf_pos, &pdf_dir);
     PathVertex* cam = &path[0];
     *cam = vertex_at(VERTEX_CAMERA, o, (float3)(0.0f), 0.0f);
     cam->beta = (float3)(1.0f);
@@ -202,7 +202,7 @@ inline int generate_light_subpath(const SceneData* scene, Rng* rng, int max_dept
     float2 u_pos = rng_next2(rng);
     rng_seek(rng, SAMPLE_DRAW_LIGHT_DIRECTION);
     float2 u_dir = rng_next2(rng);
-    if (scene->info.light_count == 0) return 0;
+    if (scene->info->light_count == 0) return 0;
     float select_pdf;
     int light = sample_light_index(scene, u_light, &select_pdf);
     EmittedRay er;

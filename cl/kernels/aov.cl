@@ -17,7 +17,7 @@ __kernel void render_aov(SCENE_KERNEL_ARGS, int first_pixel, int pixel_count, in
     float2 raster = (float2)((float)(pixel % camera.width) + 0.5f, (float)(pixel / camera.width) + 0.5f);
     PathVertex eye;
     float3 d;
-    camera_generate_ray(&scene.camera, raster, (float2)(0.5f, 0.5f), &eye.p, &d);
+    camera_generate_ray(scene.camera, raster, (float2)(0.5f, 0.5f), &eye.p, &d);
     Hit hit;
     float3 value = (float3)(0.0f);
     if (intersect(scene.nodes, scene.triangles, &scene.cutouts, eye.p, d, INFINITY, &hit)) {

@@ -72,7 +72,7 @@ __kernel void mis_weight_test(SCENE_KERNEL_ARGS, __global const TestVertex* vert
     if (c.t == 1) {
         sampled = camera_path[0];
         sampled.type = VERTEX_CAMERA;
-        sampled.ng = xyz(scene.camera.forward);
+        sampled.ng = xyz(scene.camera->forward);
         sampled.ns = sampled.ng;
         sampled.pdf_fwd = 0.0f;
         sampled.pdf_rev = 0.0f;

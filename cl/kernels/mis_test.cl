@@ -89,7 +89,7 @@ __kernel void mis_weight_sums(SCENE_KERNEL_ARGS, RenderParams params, __global f
             PathVertex sampled;
             if (t == 1) {
                 sampled = x[0];
-                sampled.ng = xyz(scene.camera.forward);
+                sampled.ng = xyz(scene.camera->forward);
                 sampled.ns = sampled.ng;
             } else if (s == 1) {
                 sampled = light_path[0];
