@@ -71,6 +71,9 @@ inline int random_walk(const SceneData* scene, Rng* rng, float3 o, float3 d, flo
 #ifdef HAS_MEDIA
     int medium = vertex_medium_toward(scene, &path[start - 1], d);
 #endif
+    /* Bounce draws (lobe, direction) two bounces at a time: lanes 0 and 1 for an even bounce,
+     * 2 and 3 for the odd one after it (rng_draws4). */
+    float4 bounce_x, bounce_y;
     while (i < end && !is_black(beta)) {
         Hit hit;
         PathVertex* vertex = &path[i];
@@ -139,9 +142,14 @@ inline int random_walk(const SceneData* scene, Rng* rng, float3 o, float3 d, flo
         ++i;
         if (vertex->type == VERTEX_LIGHT || i == end) break;
 
-        rng_seek(rng, first_draw + SAMPLE_DRAWS_PER_BOUNCE * (uint)(i - 1 - start));
-        float u_lobe = rng_next(rng);
-        float2 u_dir = rng_next2(rng);
+        int bounce = i - 1 - start;
+        if ((bounce & 1) == 0) {
+            uint draw = first_draw + SAMPLE_DRAWS_PER_BOUNCE * (uint)bounce;
+            rng_draws4(rng, (uint4)(draw, draw + 1u, draw + SAMPLE_DRAWS_PER_BOUNCE, draw + SAMPLE_DRAWS_PER_BOUNCE + 1u),
+                       &bounce_x, &bounce_y);
+        }
+        float u_lobe = (bounce & 1) ? bounce_x.s2 : bounce_x.s0;
+        float2 u_dir = (bounce & 1) ? (float2)(bounce_x.s3, bounce_y.s3) : (float2)(bounce_x.s1, bounce_y.s1);
 #ifdef HAS_MEDIA
         if (vertex->type == VERTEX_MEDIUM) {
             /* The phase function is its own density, up to the isotropic shortcut of
