@@ -58,9 +58,9 @@ inline float3 path_tracer_emitter_hit(const SceneData* scene, const PathVertex* 
     return L * (1.0f / (1.0f + ratio));
 }
 
-/* s = 1 at the path's vertex v: a light point sampled from v (draws u_light, u), joined to it, weighted
- * against s = 0 (the same path found by sampling v's BSDF toward the light point; p_0 / p_1 = its
- * area density over the light's origin density, 0 ratio for a delta light). */
+/* s = 1 at the path's vertex v: a light point sampled from v (draws u_light, u) and joined to
+ * it, weighted against s = 0 (the same path found by sampling v's BSDF toward the light point;
+ * p_0 / p_1 = its area density over the light's origin density; weight 1 for a delta light). */
 inline float3 path_tracer_light_sample(const SceneData* scene, float u_light, float2 u, const PathVertex* prev,
                                        const PathVertex* v) {
     float3 L = (float3)(0.0f);

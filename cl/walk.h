@@ -145,8 +145,8 @@ inline int random_walk(const SceneData* scene, Rng* rng, float3 o, float3 d, flo
         int bounce = i - 1 - start;
         if ((bounce & 1) == 0) {
             uint draw = first_draw + SAMPLE_DRAWS_PER_BOUNCE * (uint)bounce;
-            rng_draws4(rng, (uint4)(draw, draw + 1u, draw + SAMPLE_DRAWS_PER_BOUNCE, draw + SAMPLE_DRAWS_PER_BOUNCE + 1u),
-                       &bounce_x, &bounce_y);
+            uint next = draw + SAMPLE_DRAWS_PER_BOUNCE;
+            rng_draws4(rng, (uint4)(draw, draw + 1u, next, next + 1u), &bounce_x, &bounce_y);
         }
         float u_lobe = (bounce & 1) ? bounce_x.s2 : bounce_x.s0;
         float2 u_dir = (bounce & 1) ? (float2)(bounce_x.s3, bounce_y.s3) : (float2)(bounce_x.s1, bounce_y.s1);

@@ -104,5 +104,44 @@ TEST(Rng, IndependentSamplerIsNotANet) {
     EXPECT_FALSE(is_net(v, 6));
 }
 
+// rng_draws4 (four draws over four SIMD lanes, what the path tracer and random_walk take their
+// draws from) gives exactly rng_next2's two values and rng_next's one at each of its draws, for
+// every sampler, at draws whose numbers straddle the table's blocks.
+TEST(Rng, FourDrawsAtOnceAreTheSingleDraws) {
+    const int n = 64;
+    for (const char* sampler : {"SAMPLER_SOBOL", "SAMPLER_ZSOBOL", ""}) {
+        std::vector<std::string> defines;
+        if (*sampler) defines.push_back(sampler);
+        DeviceContext& device = test_device();
+        const ProgramBuild& build = device.program("kernels/rng_test.cl", defines);
+        for (uint32_t first : {0u, 5u, 30u, 61u}) {
+            cl::Kernel kernel(build.program, "draws4_values");
+            cl::Buffer out(device.context(), CL_MEM_WRITE_ONLY, sizeof(cl_float2) * 8 * n);
+            cl::Buffer next1(device.context(), CL_MEM_WRITE_ONLY, sizeof(cl_float) * 4 * n);
+            kernel.setArg(0, uint32_t(1234));
+            kernel.setArg(1, uint32_t(7));
+            kernel.setArg(2, first);
+            kernel.setArg(3, out);
+            kernel.setArg(4, next1);
+            device.queue().enqueueNDRangeKernel(kernel, cl::NullRange, cl::NDRange(size_t(n)), cl::NullRange);
+            std::vector<cl_float2> v(size_t(8) * n);
+            std::vector<float> one(size_t(4) * n);
+            device.queue().enqueueReadBuffer(out, CL_TRUE, 0, sizeof(cl_float2) * v.size(), v.data());
+            device.queue().enqueueReadBuffer(next1, CL_TRUE, 0, sizeof(float) * one.size(), one.data());
+            int differing = 0, distinct = 0;
+            for (int i = 0; i < n; ++i)
+                for (int k = 0; k < 4; ++k) {
+                    const cl_float2& single = v[size_t(8) * i + k];
+                    const cl_float2& lane = v[size_t(8) * i + 4 + k];
+                    differing += single.s[0] != lane.s[0] || single.s[1] != lane.s[1] ||
+                                 one[size_t(4) * i + k] != lane.s[0];
+                    distinct += k > 0 && lane.s[0] != v[size_t(8) * i + 4].s[0];
+                }
+            EXPECT_EQ(differing, 0) << "sampler '" << sampler << "' draws " << first << "..";
+            EXPECT_GT(distinct, 3 * n / 2) << "the four lanes are four different draws";
+        }
+    }
+}
+
 }  // namespace
 }  // namespace clbdpt::test
