@@ -87,11 +87,7 @@ inline float3 path_tracer_light_sample(const SceneData* scene, float u_light, fl
  * connections made at each vertex, added into *sum (L 0 and bad_strategy -1 on entry). */
 inline void path_tracer_sample(const SceneData* scene, Rng* rng, float2 raster, PathTracerSum* sum) {
     float3 o, d;
-    rng_seek(rng, SAMPLE_DRAW_LENS);
-    float2 u_lens = rng_next2(rng);
-    camera_generate_ray(scene->camera, raster, u_lens, &o, &d);
-    float pdf_pos, pdf_fwd;
-    camera_pdf_we(scene->camera, o, d, &pdf_pos, &pdf_fwd);
+    float pdf_fwd = camera_subpath_ray(scene, rng, raster, &o, &d);
     if (pdf_fwd == 0.0f) return;
     PathVertex prev = vertex_at(VERTEX_CAMERA, o, (float3)(0.0f), 0.0f);
     prev.beta = (float3)(1.0f);

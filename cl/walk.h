@@ -185,15 +185,22 @@ inline int random_walk(const SceneData* scene, Rng* rng, float3 o, float3 d, flo
     return i - start;
 }
 
+/* A camera subpath's first ray through raster position `raster`, from the lens point of the
+ * sample's lens draw: its origin, direction and the direction's solid-angle density (0: none). */
+inline float camera_subpath_ray(const SceneData* scene, Rng* rng, float2 raster, float3* o, float3* d) {
+    rng_seek(rng, SAMPLE_DRAW_LENS);
+    float2 u_lens = rng_next2(rng);
+    camera_generate_ray(scene->camera, raster, u_lens, o, d);
+    float pdf_pos, pdf_dir;
+    camera_pdf_we(scene->camera, *o, *d, &pdf_pos, &pdf_dir);
+    return pdf_dir;
+}
+
 /* Camera subpath through raster position `raster`: at most max_depth + 2 vertices (the camera,
  * max_depth scattering vertices and the emitter); max_depth = -1 gives the camera vertex alone. */
 inline int generate_camera_subpath(const SceneData* scene, Rng* rng, float2 raster, int max_depth, PathVertex* path) {
     float3 o, d;
-    rng_seek(rng, SAMPLE_DRAW_LENS);
-    float2 u_lens = rng_next2(rng);
-    camera_generate_ray(scene->camera, raster, u_lens, &o, &d);
-    float pdf_pos, pdf_dir;
-    camera_pdf_we(scene->camera, o, d, &pdf_pos, &pdf_dir);
+    float pdf_dir = camera_subpath_ray(scene, rng, raster, &o, &d);
     PathVertex* cam = &path[0];
     *cam = vertex_at(VERTEX_CAMERA, o, (float3)(0.0f), 0.0f);
     cam->beta = (float3)(1.0f);
