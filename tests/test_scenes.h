@@ -515,9 +515,6 @@ inline std::string options_name(const RenderOptions& o) {
     return n + "-d" + std::to_string(o.max_depth);
 }
 
-}  // namespace clbdpt::test
-
-namespace clbdpt::test {
 
 // The path tracer one vertex at a time (cl/path_tracer.h) against the same strategies made
 // from a stored camera subpath, as bdpt makes them (RenderOptions::pt_from_subpaths): the

@@ -41,7 +41,7 @@ struct RenderOptions {
     bool drop_non_finite = false;
     // Tests and benchmarks only: the path tracer built as bdpt builds its strategies, from a
     // stored camera subpath (cl/kernels/render.cl, PT_FROM_SUBPATHS), instead of one vertex at
-    // a time. The two give the same image up to float rounding.
+    // a time. The two give the same image bit for bit on PoCL (tests/path_tracer_test.cpp).
     bool pt_from_subpaths = false;
     // Tests only: pixel whose sample 0 gets a NaN contribution (-1: none).
     int debug_nan_pixel = -1;
