@@ -1,8 +1,7 @@
 /* Light sources (seed ch. 1.3 and 6; pbrt-v3 lights/): one-sided triangle area lights, point,
  * spot, directional and environment lights. For each: Sample_Li / Pdf_Li (reaching a scene
  * point), Sample_Le / Pdf_Le (emitting a ray, origin and direction densities apart), and the
- * emitted radiance. Lights are chosen in proportion to their power, spot lights to their
- * intensity (light_cdf, host/render/device_scene.cpp).
+ * emitted radiance. Lights are chosen by power (light_cdf).
  *
  * Measures: pdf_w is solid angle at the receiving point, pdf_pos is area on the light (or on
  * the scene's bounding disk for directional and environment lights), pdf_dir is solid angle

@@ -155,7 +155,7 @@ typedef struct {
     float one_minus_cos_falloff;
     float area;              /* area: triangle area */
     float select_pdf;        /* probability that light selection picks this light, in
-                                proportion to DeviceScene::light_selection_weight */
+                                proportion to its power (DeviceScene::light_power) */
     clbdpt_int medium;       /* point, spot: the medium around the light (1 + index, 0 = vacuum) */
     clbdpt_int pad1;
 } Light;

@@ -180,11 +180,10 @@ DeviceScene build_device_scene(const Scene& scene, int width, int height) {
     ds.info.world_center = float4_of(center, radius);
     ds.info.environment_light = -1;
 
-    std::vector<float> weights;
-    // Light selection (for light subpaths and light samples alike) is proportional to a weight:
-    // the luminance of the light's power, except for spot lights (below). For a textured
-    // emitter the texture's mean luminance stands in for its mean over the triangle. Any
-    // positive weights are unbiased: the same probabilities serve sampling and MIS.
+    std::vector<float> powers;
+    // Light selection is proportional to power; for a textured emitter the texture's mean
+    // luminance stands in for its mean over the triangle (any positive weight is unbiased:
+    // the same probabilities serve sampling and MIS).
     std::map<int, float> texture_luminance;
     auto emission_scale = [&](const Material& m) {
         if (!m.ke_texture) return 1.0f;
@@ -214,18 +213,18 @@ DeviceScene build_device_scene(const Scene& scene, int width, int height) {
         l.emission = m.ke;
         l.area = 0.5f * length(cross(e1, e2));
         ds.lights.push_back(l);
-        weights.push_back(luminance(vec3_of(m.ke)) * emission_scale(m) * l.area * kPi);
+        powers.push_back(luminance(vec3_of(m.ke)) * emission_scale(m) * l.area * kPi);
     }
     for (const LightDesc& desc : scene.lights) {
         Light l{};
-        float weight = 0;
+        float power = 0;
         switch (desc.kind) {
         case LightDesc::Kind::Point:
             l.kind = LIGHT_POINT;
             l.medium = medium_at(ds, scene.scene_medium, desc.position);
             l.position = float4_of(desc.position, 1.0f);
             l.emission = float4_of(desc.color);
-            weight = 4.0f * kPi * luminance(desc.color);
+            power = 4.0f * kPi * luminance(desc.color);
             break;
         case LightDesc::Kind::Spot: {
             l.kind = LIGHT_SPOT;
@@ -245,14 +244,9 @@ DeviceScene build_device_scene(const Scene& scene, int width, int height) {
             if (!(l.one_minus_cos_total > 0.0f))
                 throw Error(scene.path + ": spot light cone of " + std::to_string(desc.cone_angle) +
                             " degrees is too narrow to represent");
-            // Weighed as a point light of its intensity (4 pi I), not by its own flux (pbrt-v3:
-            // 2 pi (1 - (cos_falloff + cos_total) / 2) I). Inside its cone a spot is as bright
-            // as that point light; by its flux it would be picked in proportion to the sphere
-            // its cone covers, and every point it lights would pay for that in variance (on
-            // point-spot, beside a point light of similar intensity, it was picked 6.5% of the
-            // time: pt's MSE 2.4x that of weighing by intensity at 64 spp). By intensity, what
-            // is lost is bounded: the samples spent on it from outside its cone.
-            weight = 4.0f * kPi * luminance(desc.color);
+            // pbrt-v3: 2 pi (1 - (cos_falloff + cos_total) / 2).
+            power = float(3.14159265358979323846 * (double(l.one_minus_cos_falloff) + l.one_minus_cos_total)) *
+                    luminance(desc.color);
             break;
         }
         case LightDesc::Kind::Directional:
@@ -261,7 +255,7 @@ DeviceScene build_device_scene(const Scene& scene, int width, int height) {
             if (!(length(desc.direction) > 0)) throw Error(scene.path + ": directional light has a zero 'direction'");
             l.direction = float4_of(normalize(desc.direction));
             l.emission = float4_of(desc.color);
-            weight = kPi * radius * radius * luminance(desc.color);
+            power = kPi * radius * radius * luminance(desc.color);
             break;
         case LightDesc::Kind::Environment: {
             if (scene.scene_medium != 0) throw Error(scene.path + ": an environment light cannot shine through the scene-wide medium");
@@ -275,20 +269,20 @@ DeviceScene build_device_scene(const Scene& scene, int width, int height) {
                     sum += luminance({map.rgb[i], map.rgb[i + 1], map.rgb[i + 2]});
                 mean = float(sum / double(map.rgb.size() / 3));
             }
-            weight = kPi * radius * radius * luminance(desc.color) * mean;
+            power = kPi * radius * radius * luminance(desc.color) * mean;
             ds.info.environment_light = int(ds.lights.size());
             break;
         }
         }
         ds.lights.push_back(l);
-        weights.push_back(weight);
+        powers.push_back(power);
     }
     ds.light_cdf.assign(ds.lights.size() + 1, 0.0f);
     if (!ds.lights.empty()) {
-        ds.light_selection_weight = weights;
-        float total = build_cdf(weights, ds.light_cdf.data());
+        ds.light_power = powers;
+        float total = build_cdf(powers, ds.light_cdf.data());
         for (size_t i = 0; i < ds.lights.size(); ++i) {
-            ds.lights[i].select_pdf = total > 0 ? weights[i] / total : 1.0f / float(ds.lights.size());
+            ds.lights[i].select_pdf = total > 0 ? powers[i] / total : 1.0f / float(ds.lights.size());
         }
     }
     if (scene.environment_map.width > 0) {

@@ -22,7 +22,7 @@ struct DeviceScene {
     std::vector<Material> materials;
     std::vector<Light> lights;
     std::vector<float> light_cdf;         // lights.size() + 1 entries
-    std::vector<float> light_selection_weight;  // per light: what light selection is proportional to (host only; device_scene.cpp)
+    std::vector<float> light_power;       // per light: luminance of its emitted power (host only)
     std::vector<cl_float4> env_texels;    // env map, row 0 = +y
     std::vector<float> env_distribution;  // see cl/lights.h
     std::vector<TriangleUV> uvs;          // BVH order; empty without textures
