@@ -72,9 +72,9 @@ inline float3 connect_bdpt(const SceneData* scene, const StrategyMix* mix, Rng* 
         float2 u = rng_next2(rng);
         if (!vertex_is_connectible(scene, pt) || scene->info->light_count == 0) return L;
         float select_pdf;
-        int light = sample_light_index(scene, u_light, &select_pdf);
+        int light = sample_light_for_point(scene, pt->p, u_light, &select_pdf);
         LightSample ls;
-        if (light_sample_li(scene, light, pt->p, u, &ls)) {
+        if (light >= 0 && light_sample_li(scene, light, pt->p, u, &ls)) {
             sampled = vertex_at(VERTEX_LIGHT, ls.p, ls.n, ls.p_error);
             sampled.beta = ls.li / (ls.pdf_w * select_pdf);
             sampled.light = light;

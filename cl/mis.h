@@ -55,6 +55,19 @@ inline float mis_weight(const SceneData* scene, const StrategyMix* mix, const Pa
     const PathVertex* emitter = s == 0 ? &pt : (s == 1 ? &qs : &light_path[0]);
     int light_is_area = emitter->type == VERTEX_SURFACE || vertex_light_kind(scene, emitter) == LIGHT_AREA;
 
+    /* A light sample (s = 1, t >= 2) picks its light with a distribution of its own where
+     * NEE_CONE_AWARE (cl/lights.h), every other strategy with select_pdf. The densities below
+     * use select_pdf throughout; the s = 1 term is then scaled by the ratio of the two, and if
+     * s = 1 is the strategy weighed, every other term is divided by it. */
+    float s1_scale = 1.0f;
+#ifdef NEE_CONE_AWARE
+    if (s + t >= 3) {
+        /* the vertex a light sample would be taken from: the path's second from the light */
+        const PathVertex* sample_from = s == 0 ? pt_minus : (s == 1 ? &pt : &light_path[1]);
+        s1_scale = light_sample_selection_ratio(scene, emitter->light, sample_from->p);
+    }
+#endif
+
     /* The endpoints are connected deterministically, so neither is a delta vertex of this
      * path; their reverse densities and those of their predecessors follow the connection.
      * Only those that the recursions below reach are evaluated: the recursions stop where the
@@ -92,8 +105,11 @@ inline float mis_weight(const SceneData* scene, const StrategyMix* mix, const Pa
         int rev_is_delta = i + 1 < t - 1 && camera_path[i + 1].delta;
         ri *= mis_ratio(pdf_rev, rev_is_delta, pdf_fwd, camera_path[i - 1].delta);
         if (ri == 0.0f) break;
-        if (!delta && !camera_path[i - 1].delta && strategy_enabled(mix, s + t - i, i, light_is_area))
-            sum_ri += ri * strategy_sample_count(mix, s + t - i, i) * inv_count;
+        if (!delta && !camera_path[i - 1].delta && strategy_enabled(mix, s + t - i, i, light_is_area)) {
+            float term = ri * strategy_sample_count(mix, s + t - i, i) * inv_count;
+            if (s + t - i == 1 && i >= 2) term *= s1_scale;
+            sum_ri += term;
+        }
     }
     /* Light side: r_i for strategies (i, s + t - i), i = s-1 .. 0, with the same conventions;
      * the light vertex's own densities are conventions for a delta light as well (a point's
@@ -108,9 +124,13 @@ inline float mis_weight(const SceneData* scene, const StrategyMix* mix, const Pa
         int rev_is_delta = (i + 1 < s - 1 && light_path[i + 1].delta) || (i == 0 && delta_light_vertex);
         ri *= mis_ratio(pdf_rev, rev_is_delta, pdf_fwd, delta_light_vertex);
         if (ri == 0.0f) break;
-        if (!delta && !delta_light_vertex && strategy_enabled(mix, i, s + t - i, light_is_area))
-            sum_ri += ri * strategy_sample_count(mix, i, s + t - i) * inv_count;
+        if (!delta && !delta_light_vertex && strategy_enabled(mix, i, s + t - i, light_is_area)) {
+            float term = ri * strategy_sample_count(mix, i, s + t - i) * inv_count;
+            if (i == 1 && s + t - 1 >= 2) term *= s1_scale;
+            sum_ri += term;
+        }
     }
+    if (s == 1 && t >= 2) sum_ri /= s1_scale;
     return 1.0f / (1.0f + sum_ri);
 }
 

@@ -55,6 +55,9 @@ inline float3 path_tracer_emitter_hit(const SceneData* scene, const PathVertex* 
     if (is_black(L) || t < 3 || prev->delta) return L;
     float pdf_light = vertex_pdf_light_origin(scene, v, prev);
     float ratio = mis_ratio(pdf_light, 0, v->pdf_fwd, 0);
+#ifdef NEE_CONE_AWARE
+    ratio *= light_sample_selection_ratio(scene, v->light, prev->p); /* pdf_light has select_pdf */
+#endif
     return L * (1.0f / (1.0f + ratio));
 }
 
@@ -66,9 +69,9 @@ inline float3 path_tracer_light_sample(const SceneData* scene, float u_light, fl
     float3 L = (float3)(0.0f);
     if (!vertex_is_connectible(scene, v) || scene->info->light_count == 0) return L;
     float select_pdf;
-    int light = sample_light_index(scene, u_light, &select_pdf);
+    int light = sample_light_for_point(scene, v->p, u_light, &select_pdf);
     LightSample ls;
-    if (!light_sample_li(scene, light, v->p, u, &ls)) return L;
+    if (light < 0 || !light_sample_li(scene, light, v->p, u, &ls)) return L;
     PathVertex sampled = vertex_at(VERTEX_LIGHT, ls.p, ls.n, ls.p_error);
     sampled.beta = ls.li / (ls.pdf_w * select_pdf);
     sampled.light = light;
@@ -79,6 +82,9 @@ inline float3 path_tracer_light_sample(const SceneData* scene, float u_light, fl
     if (vertex_is_delta_light(scene, &sampled)) return L;
     float pdf_bsdf = vertex_pdf(scene, v, prev, &sampled);
     float ratio = mis_ratio(pdf_bsdf, 0, sampled.pdf_fwd, 0);
+#ifdef NEE_CONE_AWARE
+    ratio /= light_sample_selection_ratio(scene, light, v->p); /* sampled.pdf_fwd has select_pdf */
+#endif
     return L * (1.0f / (1.0f + ratio));
 }
 

@@ -15,6 +15,8 @@
 // order 1 (or of the scene radius r) agree with the double reference to 1e-5 (absolute, or
 // relative to r): ~100 ulps; radiances copied from the light to 1e-6; chi-square tests at
 // kChiSquareSignificance, Monte Carlo means within kSigmas standard errors (kernel_test_util.h).
+#include <algorithm>
+
 #include <gtest/gtest.h>
 
 #include "kernel_test_util.h"
@@ -585,6 +587,52 @@ TEST(Lights, SelectionFollowsSelectPdf) {
         obs[i] += 1;
     }
     expect_fit(obs, expected, "light selection");
+}
+
+// A light sample from a point (NEE_CONE_AWARE: this scene has a spot among 5 lights) picks
+// lights in proportion to select_pdf, but a spot by 4 pi I over the total power where its cone
+// holds the point and never where it does not (chi-square on the index frequencies); it
+// reports that probability, and light_sample_selection_ratio is it over select_pdf.
+TEST(Lights, LightSampleSkipsSpotsThatCannotReachThePoint) {
+    const TestScene& scene = map_scene();
+    ASSERT_NE(std::find(scene.defines.begin(), scene.defines.end(), "NEE_CONE_AWARE"), scene.defines.end());
+    const std::vector<Light>& lights = scene.ds.lights;
+    double total_power = 0;
+    for (float p : scene.ds.light_power) total_power += p;
+    const D3 spot_axis = normalize(kSpotTarget - kSpotPos);
+    const D3 inside = kSpotPos + 2.5 * spot_axis;                      // on the cone's axis
+    const D3 outside = kSpotPos + 2.5 * normalize(D3(1, -0.2, 0.1));   // 80 degrees off it
+    for (D3 x : {inside, outside}) {
+        const bool in_cone = dot(normalize(x - kSpotPos), spot_axis) >= 1 - double(lights[kSpot].one_minus_cos_total);
+        ASSERT_EQ(in_cone, x.x == inside.x);
+        std::vector<double> weight(lights.size());
+        double total = 0;
+        for (size_t i = 0; i < lights.size(); ++i) {
+            weight[i] = lights[i].select_pdf;
+            if (int(i) == kSpot) weight[i] = in_cone ? 4 * kPi * luminance({5, 4, 3}) / total_power : 0.0;
+            total += weight[i];
+        }
+        const size_t n = 1 << 16;
+        cl::Kernel k = scene.kernel("kernels/lights_test.cl", "light_select_at_point_test");
+        k.setArg(SceneBuffers::kSceneArgCount, cl_uint(73));
+        k.setArg(SceneBuffers::kSceneArgCount + 1, cl_float4{{float(x.x), float(x.y), float(x.z), 0.0f}});
+        cl::Buffer out = output_buffer<cl_float4>(n);
+        k.setArg(SceneBuffers::kSceneArgCount + 2, out);
+        launch(k, n);
+        std::vector<double> obs(lights.size(), 0.0), expected(lights.size());
+        for (const cl_float4& r : download<cl_float4>(out, n)) {
+            const int i = int(r.s[0]);
+            ASSERT_GE(i, 0);
+            ASSERT_LT(i, int(lights.size()));
+            ASSERT_GT(weight[size_t(i)], 0.0) << "picked light " << i << ", which cannot reach the point";
+            ASSERT_LE(rel_diff(r.s[1], weight[size_t(i)] / total), 1e-5);
+            ASSERT_LE(rel_diff(r.s[2], weight[size_t(i)] / total / lights[size_t(i)].select_pdf), 1e-5);
+            obs[size_t(i)] += 1;
+        }
+        for (size_t i = 0; i < lights.size(); ++i) expected[i] = double(n) * weight[i] / total;
+        if (!in_cone) expected.erase(expected.begin() + kSpot), obs.erase(obs.begin() + kSpot);
+        expect_fit(obs, expected, in_cone ? "light sample inside the cone" : "light sample outside the cone");
+    }
 }
 
 }  // namespace

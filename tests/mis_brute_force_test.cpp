@@ -163,6 +163,30 @@ struct Reference {
             env_integral += env_func.back();
         }
         env_integral /= double(w) * h;
+        bool spot = false;
+        for (const Light& l : ds.lights) spot |= l.kind == LIGHT_SPOT;
+        cone_aware = spot && ds.lights.size() <= kConeAwareMaxLights;
+        for (float p : ds.light_power) total_power += p;
+    }
+
+    // A light sample from x (s = 1) picks light l with probability w_l(x) / sum_k w_k(x) in a
+    // scene with spot lights and few lights (cl/lights.h): w = select_pdf, but for a spot
+    // 4 pi I / (the lights' total power) where its cone contains x and 0 elsewhere; light
+    // subpaths pick by select_pdf. Returns the first probability over the second.
+    bool cone_aware = false;
+    double total_power = 0;
+    double light_weight(int l, D3 x) const {
+        const Light& L = ds.lights[size_t(l)];
+        if (L.kind != LIGHT_SPOT) return L.select_pdf;
+        bool inside = dot(normalize(x - d3(L.position)), d3(L.direction)) >= 1 - double(L.one_minus_cos_total);
+        D3 c = d3(L.emission);
+        return inside ? 4 * kPi * (0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z) / total_power : 0.0;
+    }
+    double light_sample_ratio(int l, D3 x) const {
+        if (!cone_aware) return 1;
+        double total = 0;
+        for (size_t k = 0; k < ds.lights.size(); ++k) total += light_weight(int(k), x);
+        return light_weight(l, x) / (total * ds.lights[size_t(l)].select_pdf);
     }
 
     static void env_uv(D3 d, double* u, double* v) {
@@ -718,6 +742,8 @@ void check_integrator(Integrator integrator, bool thin, uint64_t seed, Mix mix =
             double ps = 1;
             for (int i = 1; i < t; ++i) ps *= d.cam[i];
             for (int j = t; j < n; ++j) ps *= d.light[j];
+            // A light sample's own choice of light, from the path's second vertex.
+            if (s == 1 && t >= 2) ps *= ref.light_sample_ratio(path.light, path.x[size_t(n - 2)].p);
             // Only a vertex across a terminator band has a density 0 that is not a delta's:
             // strategies that would sample through it cannot produce the path.
             if (ps == 0 && path.across_terminator) continue;

@@ -23,7 +23,7 @@
         F(Medium, majorant) F(Medium, grid_offset) F(Medium, grid_size) F(Medium, world_to_grid)  \
     S(Light) F(Light, position) F(Light, direction) F(Light, emission) F(Light, kind)             \
         F(Light, triangle) F(Light, one_minus_cos_total) F(Light, one_minus_cos_falloff) F(Light, area)   \
-        F(Light, select_pdf) F(Light, medium) F(Light, pad1)                                        \
+        F(Light, select_pdf) F(Light, medium) F(Light, nee_weight)                                        \
     S(Camera) F(Camera, eye) F(Camera, right) F(Camera, up) F(Camera, forward)                    \
         F(Camera, tan_half_width) F(Camera, tan_half_height) F(Camera, lens_radius)               \
         F(Camera, focus_distance) F(Camera, width) F(Camera, height) F(Camera, film_area)         \

@@ -76,3 +76,16 @@ __kernel void light_select_test(SCENE_KERNEL_ARGS, uint seed, __global float2* o
     int i = sample_light_index(&scene, rng_next(&rng), &select_pdf);
     out[gid] = (float2)((float)i, select_pdf);
 }
+
+/* sample_light_for_point from point x on counter-based u: out[i] = (index, reported
+ * probability, light_sample_selection_ratio of that light at x, 0). */
+__kernel void light_select_at_point_test(SCENE_KERNEL_ARGS, uint seed, float4 x, __global float4* out) {
+    int gid = get_global_id(0);
+    uint rays = 0;
+    SceneData scene = SCENE_DATA_FROM_KERNEL_ARGS(&rays);
+    Rng rng = rng_init((uint)gid, 0u, seed);
+    float select_pdf = 0.0f;
+    int i = sample_light_for_point(&scene, x.xyz, rng_next(&rng), &select_pdf);
+    float ratio = i >= 0 ? light_sample_selection_ratio(&scene, i, x.xyz) : 0.0f;
+    out[gid] = (float4)((float)i, select_pdf, ratio, 0.0f);
+}

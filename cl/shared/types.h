@@ -157,7 +157,9 @@ typedef struct {
     float select_pdf;        /* probability that light selection picks this light, in
                                 proportion to its power (DeviceScene::light_power) */
     clbdpt_int medium;       /* point, spot: the medium around the light (1 + index, 0 = vacuum) */
-    clbdpt_int pad1;
+    float nee_weight;        /* weight of the light for a light sample from a point inside its
+                                reach (cl/lights.h, sample_light_for_point): select_pdf, but for
+                                a spot light 4 pi I over the lights' total power */
 } Light;
 
 /* ---- Camera --------------------------------------------------------------------------- */

@@ -93,7 +93,7 @@ CLBDPT_CHECK_FIELD(Light, one_minus_cos_falloff, 60);
 CLBDPT_CHECK_FIELD(Light, area, 64);
 CLBDPT_CHECK_FIELD(Light, select_pdf, 68);
 CLBDPT_CHECK_FIELD(Light, medium, 72);
-CLBDPT_CHECK_FIELD(Light, pad1, 76);
+CLBDPT_CHECK_FIELD(Light, nee_weight, 76);
 
 CLBDPT_CHECK_STRUCT(Camera, 96, 16);
 CLBDPT_CHECK_FIELD(Camera, eye, 0);

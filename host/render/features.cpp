@@ -76,6 +76,10 @@ std::vector<std::string> kernel_defines(const DeviceScene& scene, Integrator int
     flag(spot, "HAS_SPOT_LIGHTS");
     flag(directional, "HAS_DIRECTIONAL_LIGHTS");
     flag(environment, "HAS_ENVIRONMENT");
+    // Light samples that skip spot lights whose cone does not reach the point (cl/lights.h):
+    // a loop over the lights per sample, so only for a few lights. From the scene alone, so an
+    // all-features build renders the scene's own image.
+    if (spot && scene.lights.size() <= kConeAwareMaxLights) d.push_back("NEE_CONE_AWARE");
     // The map's code reads buffers that exist only with a map; "all features" keeps it off
     // unless the scene has one.
     if (env_map) d.push_back("HAS_ENVIRONMENT_MAP");

@@ -20,6 +20,10 @@ enum class SamplerKind { Independent = 0, Sobol = 1, ZSobol = 2 };
 const char* sampler_name(SamplerKind sampler);
 SamplerKind parse_sampler(const std::string& name);  // throws Error
 
+// Scenes with spot lights and at most this many lights take their light samples with spot
+// cones in view (NEE_CONE_AWARE, cl/lights.h); each such sample loops over every light.
+constexpr size_t kConeAwareMaxLights = 8;
+
 // all_features: every HAS_* flag on (the unspecialised build, for benchmarks and tests).
 std::vector<std::string> kernel_defines(const DeviceScene& scene, Integrator integrator, int max_depth,
                                         bool all_features = false, SamplerKind sampler = SamplerKind::Independent);
