@@ -95,7 +95,7 @@ inline float spot_falloff(__global const Light* light, float3 w) {
  * and few lights, host/render/features.cpp): there a spot light lights only the points inside
  * its cone, where it is as bright as a point light of its intensity, yet by power it would be
  * picked in proportion to the sphere its cone covers (6.5% of the time on point-spot, beside a
- * point light of similar intensity: pt's MSE 2.4x that of the choice below at 64 spp). So the
+ * point light of similar intensity: pt's MSE 3.9x that of the choice below at 64 spp). So the
  * sample from x picks light l with probability w_l(x) / sum_k w_k(x), with w = select_pdf for
  * lights other than spots, and for a spot nee_weight (4 pi I over the lights' total power) if
  * its cone contains x, else 0: no sample is spent on a spot that cannot light x, which a weight
