@@ -179,8 +179,7 @@ struct Reference {
         const Light& L = ds.lights[size_t(l)];
         if (L.kind != LIGHT_SPOT) return L.select_pdf;
         bool inside = dot(normalize(x - d3(L.position)), d3(L.direction)) >= 1 - double(L.one_minus_cos_total);
-        D3 c = d3(L.emission);
-        return inside ? 4 * kPi * (0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z) / total_power : 0.0;
+        return inside ? 4 * kPi * luminance({L.emission.s[0], L.emission.s[1], L.emission.s[2]}) / total_power : 0.0;
     }
     double light_sample_ratio(int l, D3 x) const {
         if (!cone_aware) return 1;

@@ -157,9 +157,9 @@ typedef struct {
     float select_pdf;        /* probability that light selection picks this light, in
                                 proportion to its power (DeviceScene::light_power) */
     clbdpt_int medium;       /* point, spot: the medium around the light (1 + index, 0 = vacuum) */
-    float nee_weight;        /* weight of the light for a light sample from a point inside its
-                                reach (cl/lights.h, sample_light_for_point): select_pdf, but for
-                                a spot light 4 pi I over the lights' total power */
+    float nee_weight;        /* spot: its weight for a light sample from a point inside its cone
+                                (cl/lights.h, sample_light_for_point): 4 pi I over the lights'
+                                total power; 0 for other lights, which use select_pdf */
 } Light;
 
 /* ---- Camera --------------------------------------------------------------------------- */

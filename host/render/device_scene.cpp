@@ -283,11 +283,11 @@ DeviceScene build_device_scene(const Scene& scene, int width, int height) {
         float total = build_cdf(powers, ds.light_cdf.data());
         for (size_t i = 0; i < ds.lights.size(); ++i) {
             ds.lights[i].select_pdf = total > 0 ? powers[i] / total : 1.0f / float(ds.lights.size());
-            ds.lights[i].nee_weight = ds.lights[i].select_pdf;
             // A spot light, for a light sample from a point inside its cone: as bright there
             // as a point light of its intensity (cl/lights.h, sample_light_for_point).
-            if (ds.lights[i].kind == LIGHT_SPOT && total > 0)
-                ds.lights[i].nee_weight = 4.0f * kPi * luminance(vec3_of(ds.lights[i].emission)) / total;
+            if (ds.lights[i].kind == LIGHT_SPOT)
+                ds.lights[i].nee_weight = total > 0 ? 4.0f * kPi * luminance(vec3_of(ds.lights[i].emission)) / total
+                                                    : ds.lights[i].select_pdf;
         }
     }
     if (scene.environment_map.width > 0) {
