@@ -60,7 +60,7 @@ inline float mis_weight(const SceneData* scene, const StrategyMix* mix, const Pa
      * use select_pdf throughout; the s = 1 term is then scaled by the ratio of the two, and if
      * s = 1 is the strategy weighed, every other term is divided by it. */
     float s1_scale = 1.0f;
-#ifdef NEE_CONE_AWARE
+#if defined(NEE_CONE_AWARE) && INTEGRATOR != INTEGRATOR_LT /* a light tracer has no s = 1, t >= 2 */
     if (s + t >= 3) {
         /* the vertex a light sample would be taken from: the path's second from the light */
         const PathVertex* sample_from = s == 0 ? pt_minus : (s == 1 ? &pt : &light_path[1]);
