@@ -1,21 +1,18 @@
-// Image files through OpenImageIO. Output is written to "<path>.tmp-<pid>" beside the target and
+// Image files through OpenImageIO, in a module loaded where it is needed
+// (film/image_io_module.h). Output is written to "<path>.tmp-<pid>" beside the target and
 // renamed over it at the end (rename is atomic within a folder), so an interrupted or failed
 // write never leaves a truncated image where the user expects a finished one.
 #include "film/image_io.h"
-
 
 #include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdint>
-#include <cstdio>
-#include <cstring>
 #include <filesystem>
-#include <memory>
+#include <optional>
 
-#include <OpenImageIO/imageio.h>
-#include <OpenImageIO/strutil.h>
-
+#include "film/image_io_module.h"
+#include "film/image_writer_process.h"
 #include "util/atomic_file.h"
 #include "util/error.h"
 
@@ -26,12 +23,6 @@ std::string lower_extension(const std::string& path) {
     std::string ext = std::filesystem::path(path).extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
     return ext;
-}
-
-std::string first_line(const std::string& message, const std::string& fallback) {
-    std::string line = message.substr(0, message.find('\n'));
-    while (!line.empty() && (line.back() == '\r' || line.back() == ' ')) line.pop_back();
-    return line.empty() ? fallback : line;
 }
 
 // sRGB opto-electronic transfer function (IEC 61966-2-1), linear [0,1] -> encoded [0,1].
@@ -78,99 +69,59 @@ void write_image(const std::string& path, int width, int height, const std::vect
         throw Error("cannot write '" + path + "': unsupported image format (use .exr, .png, .jpg, .jpeg, .tif or .tiff)");
     }
 
-    // The plugin is chosen from the real name; the temporary name only has to be openable.
-    std::unique_ptr<OIIO::ImageOutput> out = OIIO::ImageOutput::create(path);
-    if (!out) {
-        throw Error("cannot write '" + path + "': " + first_line(OIIO::geterror(), "no OpenImageIO plugin for it"));
-    }
-
-    const bool linear_float = lower_extension(path) == ".exr";
-    OIIO::ImageSpec spec(width, height, 3, linear_float ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8);
-    spec.attribute("oiio:ColorSpace", linear_float ? "Linear" : "sRGB");
-    spec.attribute("Software", "clbdpt");
-    if (linear_float) spec.attribute("compression", "zip");
-    const std::string ext = lower_extension(path);
-    if (ext == ".jpg" || ext == ".jpeg") spec.attribute("CompressionQuality", 95);
-    for (const auto& [key, value] : metadata.strings) spec.attribute(key, value);
-
     TemporaryFile temp(path);
-    auto fail = [&](const std::string& why) {
-        throw Error("cannot write '" + path + "': " + first_line(why, "OpenImageIO error"));
-    };
-    if (!out->open(temp.path(), spec)) fail(out->geterror());
-    bool written;
-    if (linear_float) {
-        written = out->write_image(OIIO::TypeDesc::FLOAT, rgb.data());
-    } else {
-        const std::vector<uint8_t> encoded = to_srgb8(rgb);
-        written = out->write_image(OIIO::TypeDesc::UINT8, encoded.data());
-    }
-    if (!written) {
-        const std::string why = out->geterror();
-        out->close();
-        fail(why);
-    }
-    if (!out->close()) fail(out->geterror());
-    out.reset();
+    const bool linear_float = lower_extension(path) == ".exr";
+    const std::vector<uint8_t> encoded = linear_float ? std::vector<uint8_t>() : to_srgb8(rgb);
+    const float* float_rgb = linear_float ? rgb.data() : nullptr;
+    const uint8_t* srgb8 = linear_float ? nullptr : encoded.data();
+    // A render's writer process has OpenImageIO loaded already; elsewhere (or should that
+    // process be gone) the module is loaded here.
+    std::optional<std::string> why =
+        write_in_image_writer_process(path, temp.path(), width, height, float_rgb, srgb8, metadata.strings);
+    if (!why) why = image_io_module().write_rgb(path, temp.path(), width, height, float_rgb, srgb8, metadata.strings);
+    if (!why->empty()) throw Error("cannot write '" + path + "': " + *why);
     temp.commit();
 }
 
 namespace {
 
-// Opens an image file that must hold a 2D image; throws Error naming the file otherwise.
-std::unique_ptr<OIIO::ImageInput> open_2d_image(const std::string& path) {
-    std::unique_ptr<OIIO::ImageInput> in = OIIO::ImageInput::open(path);
-    if (!in) throw Error("cannot read '" + path + "': " + first_line(OIIO::geterror(), "cannot open"));
-    const OIIO::ImageSpec& spec = in->spec();
-    if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0 || spec.depth > 1) {
-        throw Error("cannot read '" + path + "': not a 2D image");
-    }
-    return in;
+// Reads all of an image file through the module; throws Error naming the file.
+StoredImage read_stored(const std::string& path, bool own_format) {
+    StoredImage image;
+    const std::string why = image_io_module().read(path, own_format, &image);
+    if (!why.empty()) throw Error("cannot read '" + path + "': " + why);
+    return image;
 }
 
 }  // namespace
 
 std::vector<float> read_image_rgb(const std::string& path, int* width, int* height) {
-    std::unique_ptr<OIIO::ImageInput> in = open_2d_image(path);
-    const OIIO::ImageSpec& spec = in->spec();
-    const int channels = spec.nchannels;
-    const size_t pixels = static_cast<size_t>(spec.width) * static_cast<size_t>(spec.height);
-    std::vector<float> all(pixels * static_cast<size_t>(channels));
-    if (!in->read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, all.data())) {
-        throw Error("cannot read '" + path + "': " + first_line(in->geterror(), "read failed"));
-    }
-    // 8- and 16-bit files tagged sRGB (PNG and JPEG are, by default) hold encoded values;
-    // undo the curve so callers always get linear radiance.
-    const bool srgb_encoded = !spec.format.is_floating_point() &&
-                              OIIO::Strutil::iequals(spec.get_string_attribute("oiio:ColorSpace"), "sRGB");
-    in->close();
-    if (srgb_encoded) {
-        for (float& v : all) v = srgb_eotf(v);
+    StoredImage image = read_stored(path, false);
+    // 8- and 16-bit files tagged sRGB hold encoded values; undo the curve so callers always get
+    // linear radiance.
+    if (image.srgb_encoded) {
+        for (float& v : image.f32) v = srgb_eotf(v);
     }
 
     // 1 or 2 channels (grey, grey + alpha) -> grey in all three; otherwise the first three.
+    const size_t pixels = size_t(image.width) * size_t(image.height), channels = size_t(image.channels);
     std::vector<float> rgb(pixels * 3);
     for (size_t p = 0; p < pixels; ++p) {
-        const float* src = &all[p * static_cast<size_t>(channels)];
-        for (int c = 0; c < 3; ++c) rgb[p * 3 + static_cast<size_t>(c)] = channels >= 3 ? src[c] : src[0];
+        const float* src = &image.f32[p * channels];
+        for (size_t c = 0; c < 3; ++c) rgb[p * 3 + c] = channels >= 3 ? src[c] : src[0];
     }
-    *width = spec.width;
-    *height = spec.height;
+    *width = image.width;
+    *height = image.height;
     return rgb;
 }
 
 namespace {
 
-// Reads all of `in` as `type` and spreads its channels to RGBA by `source` (the file channel
-// feeding r, g, b, a; -1: opaque). `opaque` is alpha's value of 1 in T.
+// Spreads an image's channels to RGBA by `source` (the file channel feeding r, g, b, a; -1:
+// opaque). `opaque` is alpha's value of 1 in T.
 template <typename T>
-std::vector<T> read_rgba(OIIO::ImageInput& in, const std::string& path, OIIO::TypeDesc type, const int source[4],
-                         T opaque) {
-    const OIIO::ImageSpec& spec = in.spec();
-    const size_t pixels = size_t(spec.width) * size_t(spec.height), channels = size_t(spec.nchannels);
-    std::vector<T> all(pixels * channels);
-    if (!in.read_image(0, 0, 0, spec.nchannels, type, all.data()))
-        throw Error("cannot read '" + path + "': " + first_line(in.geterror(), "read failed"));
+std::vector<T> spread_to_rgba(const std::vector<T>& all, size_t pixels, size_t channels, const int source[4],
+                              T opaque) {
     std::vector<T> rgba(pixels * 4);
     for (size_t p = 0; p < pixels; ++p)
         for (int c = 0; c < 4; ++c) rgba[p * 4 + size_t(c)] = source[c] < 0 ? opaque : all[p * channels + size_t(source[c])];
@@ -180,22 +131,21 @@ std::vector<T> read_rgba(OIIO::ImageInput& in, const std::string& path, OIIO::Ty
 }  // namespace
 
 TextureImage read_texture_image(const std::string& path) {
-    std::unique_ptr<OIIO::ImageInput> in = open_2d_image(path);
-    const OIIO::ImageSpec& spec = in->spec();
-    const int channels = spec.nchannels;
+    const StoredImage stored = read_stored(path, true);
+    const int channels = stored.channels;
     TextureImage image;
-    image.width = spec.width;
-    image.height = spec.height;
-    image.is_float = spec.format.is_floating_point();
+    image.width = stored.width;
+    image.height = stored.height;
+    image.is_float = stored.is_float;
     image.has_alpha = channels == 2 || channels >= 4;
     // Which file channel feeds r, g, b, a (-1: alpha, opaque).
     int source[4] = {0, 1, 2, 3};
     if (channels < 3) source[1] = source[2] = 0;
     if (!image.has_alpha) source[3] = -1;
     else if (channels == 2) source[3] = 1;
-    if (image.is_float) image.rgba32f = read_rgba<float>(*in, path, OIIO::TypeDesc::FLOAT, source, 1.0f);
-    else image.rgba8 = read_rgba<uint8_t>(*in, path, OIIO::TypeDesc::UINT8, source, uint8_t(255));
-    in->close();
+    const size_t pixels = size_t(stored.width) * size_t(stored.height);
+    if (image.is_float) image.rgba32f = spread_to_rgba<float>(stored.f32, pixels, size_t(channels), source, 1.0f);
+    else image.rgba8 = spread_to_rgba<uint8_t>(stored.u8, pixels, size_t(channels), source, uint8_t(255));
     return image;
 }
 

@@ -1,0 +1,130 @@
+// The render's image writer process: it writes what this process would, bit for bit; if it dies,
+// write_image writes the image itself; it is not forked beside a thread.
+//
+// Each case runs in a fresh process (a death test in gtest's "threadsafe" style re-runs this
+// binary for it): start_image_writer_process forks only from a process without threads of its
+// own, and an earlier test in the same process may have started OpenCL's.
+#include <signal.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <future>
+#include <iterator>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "film/image_io.h"
+#include "film/image_io_module.h"
+#include "film/image_writer_process.h"
+#include "util/error.h"
+
+namespace clbdpt {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Fails the fresh process (exit status 1, the reason on stderr) unless `ok`.
+void require(bool ok, const std::string& what) {
+    if (ok) return;
+    std::fprintf(stderr, "FAILED: %s\n", what.c_str());
+    std::fflush(stderr);
+    std::_Exit(1);
+}
+
+std::string read_bytes(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+class ImageWriterProcessTest : public ::testing::Test {
+protected:
+    void SetUp() override {
+        ::testing::GTEST_FLAG(death_test_style) = "threadsafe";
+        dir_ = fs::temp_directory_path() /
+               ("clbdpt_image_writer_test_" + std::to_string(::getpid()) + "_" +
+                ::testing::UnitTest::GetInstance()->current_test_info()->name());
+        fs::remove_all(dir_);
+        fs::create_directories(dir_);
+    }
+    void TearDown() override {
+        std::error_code ec;
+        fs::remove_all(dir_, ec);
+    }
+    std::string file(const std::string& name) const { return (dir_ / name).string(); }
+    fs::path dir_;
+};
+
+// A 7x5 image with values no half float holds, and some out of [0, 1] for the PNG's clamp.
+std::vector<float> test_image() {
+    std::vector<float> rgb(7 * 5 * 3);
+    for (size_t i = 0; i < rgb.size(); ++i) rgb[i] = 0.0137f * float(i) + 1e-6f * float(i * i) - 0.05f;
+    return rgb;
+}
+
+TEST_F(ImageWriterProcessTest, WritesWhatThisProcessWrites) {
+    auto body = [this] {
+        const std::vector<float> rgb = test_image();
+        ImageMetadata meta;
+        meta.strings.push_back({"clbdpt:integrator", "pt"});
+        require(start_image_writer_process(), "the writer starts");
+        require(image_writer_process_id() > 0, "the writer has a process id");
+        const int writer = image_writer_process_id();
+        write_image(file("writer.exr"), 7, 5, rgb, meta);
+        write_image(file("writer.png"), 7, 5, rgb, meta);
+        require(image_writer_process_id() == writer, "the same writer wrote both");
+        require(!image_io_module_loaded(), "the writer wrote them, not this process");
+        stop_image_writer_process();
+        require(image_writer_process_id() == -1, "the writer is gone once stopped");
+        write_image(file("here.exr"), 7, 5, rgb, meta);
+        write_image(file("here.png"), 7, 5, rgb, meta);
+
+        int w = 0, h = 0;
+        const std::vector<float> back = read_image_rgb(file("writer.exr"), &w, &h);
+        require(w == 7 && h == 5 && back == rgb, "the writer's EXR holds the pixels exactly");
+        // A PNG holds no time stamp: the two files are the same bytes.
+        require(read_bytes(file("writer.png")) == read_bytes(file("here.png")), "the PNGs are identical");
+        require(!read_bytes(file("writer.png")).empty(), "the PNG is not empty");
+        int entries = 0;
+        for (auto it = fs::directory_iterator(dir_); it != fs::directory_iterator(); ++it) ++entries;
+        require(entries == 4, "no temporary file is left");
+        std::_Exit(0);
+    };
+    EXPECT_EXIT(body(), ::testing::ExitedWithCode(0), "");
+}
+
+TEST_F(ImageWriterProcessTest, ADeadWriterLeavesTheWriteToThisProcess) {
+    auto body = [this] {
+        require(start_image_writer_process(), "the writer starts");
+        ::kill(image_writer_process_id(), SIGKILL);
+        const std::vector<float> rgb = test_image();
+        write_image(file("out.exr"), 7, 5, rgb);
+        require(image_writer_process_id() == -1, "the dead writer is dropped");
+        int w = 0, h = 0;
+        require(read_image_rgb(file("out.exr"), &w, &h) == rgb, "the image is written all the same");
+        std::_Exit(0);
+    };
+    EXPECT_EXIT(body(), ::testing::ExitedWithCode(0), "");
+}
+
+TEST_F(ImageWriterProcessTest, NotForkedBesideAThread) {
+    auto body = [this] {
+        std::promise<void> release;
+        std::thread waiting([f = release.get_future()]() mutable { f.wait(); });
+        const bool started = start_image_writer_process();
+        release.set_value();
+        waiting.join();
+        require(!started, "no fork beside a running thread");
+        require(image_writer_process_id() == -1, "no writer");
+        std::_Exit(0);
+    };
+    EXPECT_EXIT(body(), ::testing::ExitedWithCode(0), "");
+}
+
+}  // namespace
+}  // namespace clbdpt
