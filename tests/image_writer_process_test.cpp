@@ -112,6 +112,23 @@ TEST_F(ImageWriterProcessTest, ADeadWriterLeavesTheWriteToThisProcess) {
     EXPECT_EXIT(body(), ::testing::ExitedWithCode(0), "");
 }
 
+TEST_F(ImageWriterProcessTest, ALargeImageIsWrittenHere) {
+    auto body = [this] {
+        require(start_image_writer_process(), "the writer starts");
+        // One row more than kImageWriterMaxBytes holds, in float RGB.
+        const int width = 1024, height = int(kImageWriterMaxBytes / (width * 3 * sizeof(float))) + 1;
+        std::vector<float> rgb(size_t(width) * size_t(height) * 3, 0.25f);
+        rgb.back() = 2.0f;
+        write_image(file("large.exr"), width, height, rgb);
+        require(image_io_module_loaded(), "this process wrote it");
+        require(image_writer_process_id() > 0, "the writer is kept for smaller images");
+        int w = 0, h = 0;
+        require(read_image_rgb(file("large.exr"), &w, &h) == rgb, "the image is written");
+        std::_Exit(0);
+    };
+    EXPECT_EXIT(body(), ::testing::ExitedWithCode(0), "");
+}
+
 TEST_F(ImageWriterProcessTest, NotForkedBesideAThread) {
     auto body = [this] {
         std::promise<void> release;

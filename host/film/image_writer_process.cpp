@@ -179,8 +179,8 @@ std::optional<std::string> write_in_image_writer_process(const std::string& path
                                                          const uint8_t* srgb8, const ImageAttributes& metadata) {
     Writer& w = writer();
     std::lock_guard<std::mutex> lock(w.mutex);
-    if (w.fd < 0) return std::nullopt;
     const size_t values = size_t(width) * size_t(height) * 3;
+    if (w.fd < 0 || values * (float_rgb ? sizeof(float) : 1) > kImageWriterMaxBytes) return std::nullopt;
     bool ok = send_string(w.fd, path) && send_string(w.fd, temp_path) && send_u64(w.fd, uint64_t(width)) &&
               send_u64(w.fd, uint64_t(height)) && send_u64(w.fd, float_rgb ? 1 : 0) && send_u64(w.fd, metadata.size());
     for (const auto& [key, value] : metadata) ok = ok && send_string(w.fd, key) && send_string(w.fd, value);

@@ -25,8 +25,14 @@ namespace clbdpt {
 // module itself (a scene's textures), or if the fork fails.
 bool start_image_writer_process();
 
+// The largest image (its pixels' bytes) handed to the writer. The writer holds a copy of what
+// it writes, so a film near the machine's memory would risk the render's end on the copy; an
+// image this large takes long enough to render that loading OpenImageIO here costs nothing.
+constexpr uint64_t kImageWriterMaxBytes = uint64_t(64) << 20;
+
 // Writes through the writer (as ImageIoModule::write_rgb): "" on success, else why; nullopt if
-// there is no writer or it has died, for the caller to write the image itself.
+// there is no writer, it has died or the image is larger than kImageWriterMaxBytes, for the
+// caller to write the image itself.
 std::optional<std::string> write_in_image_writer_process(const std::string& path, const std::string& temp_path,
                                                          int width, int height, const float* float_rgb,
                                                          const uint8_t* srgb8, const ImageAttributes& metadata);
