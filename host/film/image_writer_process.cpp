@@ -77,7 +77,9 @@ const int threads_at_start = thread_count();
 // The writer's life: load the module, then serve requests until the socket closes.
 [[noreturn]] void serve(int fd, pid_t render) {
     // Ctrl-C is the render's to handle: it goes on to write what it has, through this process.
+    // The render's handlers (cli/interrupt.h) are not this process's: SIGTERM simply ends it.
     ::signal(SIGINT, SIG_IGN);
+    ::signal(SIGTERM, SIG_DFL);
     ::prctl(PR_SET_PDEATHSIG, SIGKILL);
     if (::getppid() != render) ::_exit(0);  // the render died before prctl
     // A library that calls exit() here (libjpeg's default error handler does) would run the
