@@ -16,7 +16,7 @@
 #include "device/opencl.h"
 #include "film/checkpoint.h"
 #include "film/image_io.h"
-#include "film/image_writer_process.h"
+#include "film/image_io_process.h"
 #include "mpi/cluster.h"
 #include "render/aov.h"
 #include "render/automatic_view.h"
@@ -265,6 +265,9 @@ Checkpoint read_checkpoint_to_resume(const std::string& path, const CheckpointIn
 int run_render(const RenderArgs& args, Cluster& cluster) {
     install_interrupt_handlers();
     const bool leader = cluster.leader();
+    // OpenImageIO loads in a process of its own while the scene loads, OpenCL starts and the
+    // kernels load here; it reads the scene's images and writes the render's.
+    if (leader) start_image_io_process();
     LoadOptions load_options;
     load_options.default_light = !args.no_default_light;
     using Clock = std::chrono::steady_clock;
@@ -286,8 +289,6 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
     const int width = args.width > 0 ? args.width : scene.width;
     const int height = args.height > 0 ? args.height : scene.height;
     check_film_fits_in_memory(width, height, args.strategy_images.empty() ? 0 : (args.max_depth >= 0 ? args.max_depth : scene.render.max_depth));
-    // OpenImageIO loads in a process of its own while OpenCL starts and the kernels load here.
-    if (leader) start_image_writer_process();
 
     RenderOptions options;
     // auto: bdpt whose strategy mix (or plain pt) a pilot render picks (render/strategy_pilot.h).

@@ -12,7 +12,7 @@
 #include <optional>
 
 #include "film/image_io_module.h"
-#include "film/image_writer_process.h"
+#include "film/image_io_process.h"
 #include "util/atomic_file.h"
 #include "util/error.h"
 
@@ -74,10 +74,10 @@ void write_image(const std::string& path, int width, int height, const std::vect
     const std::vector<uint8_t> encoded = linear_float ? std::vector<uint8_t>() : to_srgb8(rgb);
     const float* float_rgb = linear_float ? rgb.data() : nullptr;
     const uint8_t* srgb8 = linear_float ? nullptr : encoded.data();
-    // A render's writer process has OpenImageIO loaded already; elsewhere (or should that
+    // A render's image I/O process has OpenImageIO loaded already; elsewhere (or should that
     // process be gone) the module is loaded here.
     std::optional<std::string> why =
-        write_in_image_writer_process(path, temp.path(), width, height, float_rgb, srgb8, metadata.strings);
+        write_in_image_io_process(path, temp.path(), width, height, float_rgb, srgb8, metadata.strings);
     if (!why) why = image_io_module().write_rgb(path, temp.path(), width, height, float_rgb, srgb8, metadata.strings);
     if (!why->empty()) throw Error("cannot write '" + path + "': " + *why);
     temp.commit();
@@ -85,11 +85,13 @@ void write_image(const std::string& path, int width, int height, const std::vect
 
 namespace {
 
-// Reads all of an image file through the module; throws Error naming the file.
+// Reads all of an image file, through the render's image I/O process where there is one, else
+// through the module here; throws Error naming the file.
 StoredImage read_stored(const std::string& path, bool own_format) {
     StoredImage image;
-    const std::string why = image_io_module().read(path, own_format, &image);
-    if (!why.empty()) throw Error("cannot read '" + path + "': " + why);
+    std::optional<std::string> why = read_in_image_io_process(path, own_format, &image);
+    if (!why) why = image_io_module().read(path, own_format, &image);
+    if (!why->empty()) throw Error("cannot read '" + path + "': " + *why);
     return image;
 }
 

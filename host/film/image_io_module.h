@@ -5,8 +5,8 @@
 // GDAL, DICOM, ...). Linked into the executable, the dynamic linker spends 0.3-0.4 s of one
 // core on them before main() on every run, and each later dlopen (PoCL, LLVM, every kernel
 // binary) searches their symbols too. Loaded by dlopen with RTLD_LOCAL, they cost nothing where
-// no image is read or written, and a render loads them in its image writer process
-// (film/image_writer_process.h), on the core that is idle while the render starts.
+// no image is read or written, and a render loads them in its image I/O process
+// (film/image_io_process.h), on the core the render's start leaves idle.
 //
 // The module is built by the same compiler from the same tree, so C++ types cross the boundary;
 // errors cross as strings (an exception thrown in a dlopen'ed object and caught here would need

@@ -1,7 +1,9 @@
-// The image writer process (film/image_writer_process.h). One request per image over a Unix
-// stream socket: path, temporary path, width, height, metadata pairs and the pixels (float RGB
-// for .exr, sRGB-encoded bytes otherwise); one reply: the write's error, "" on success.
-#include "film/image_writer_process.h"
+// The image I/O process (film/image_io_process.h). Requests over a Unix stream socket, each
+// answered before the next: a write (path, temporary path, width, height, metadata pairs, the
+// pixels: float RGB for .exr, sRGB-encoded bytes otherwise) is answered by the write's error,
+// "" on success; a read (path, whether in the file's own format) by the read's error and, on
+// success, the image's size, channels, format and pixels.
+#include "film/image_io_process.h"
 
 #include <fcntl.h>
 #include <signal.h>
@@ -24,7 +26,7 @@ namespace {
 bool send_all(int fd, const void* data, size_t size) {
     const char* p = static_cast<const char*>(data);
     while (size > 0) {
-        // MSG_NOSIGNAL: a writer that died is an error return here, not a SIGPIPE.
+        // MSG_NOSIGNAL: a process that died is an error return here, not a SIGPIPE.
         const ssize_t n = ::send(fd, p, size, MSG_NOSIGNAL);
         if (n < 0 && errno == EINTR) continue;
         if (n <= 0) return false;
@@ -58,6 +60,33 @@ bool receive_string(int fd, std::string* s) {
     return receive_all(fd, s->data(), s->size());
 }
 
+constexpr uint64_t kWrite = 1, kRead = 2;
+
+bool send_image(int fd, const StoredImage& image) {
+    return send_u64(fd, uint64_t(image.width)) && send_u64(fd, uint64_t(image.height)) &&
+           send_u64(fd, uint64_t(image.channels)) && send_u64(fd, image.is_float) &&
+           send_u64(fd, image.srgb_encoded) && send_u64(fd, image.f32.size()) && send_u64(fd, image.u8.size()) &&
+           send_all(fd, image.f32.data(), image.f32.size() * sizeof(float)) &&
+           send_all(fd, image.u8.data(), image.u8.size());
+}
+
+bool receive_image(int fd, StoredImage* image) {
+    uint64_t width, height, channels, is_float, srgb_encoded, floats, bytes;
+    if (!receive_u64(fd, &width) || !receive_u64(fd, &height) || !receive_u64(fd, &channels) ||
+        !receive_u64(fd, &is_float) || !receive_u64(fd, &srgb_encoded) || !receive_u64(fd, &floats) ||
+        !receive_u64(fd, &bytes))
+        return false;
+    image->width = int(width);
+    image->height = int(height);
+    image->channels = int(channels);
+    image->is_float = is_float != 0;
+    image->srgb_encoded = srgb_encoded != 0;
+    image->f32.resize(size_t(floats));
+    image->u8.resize(size_t(bytes));
+    return receive_all(fd, image->f32.data(), image->f32.size() * sizeof(float)) &&
+           receive_all(fd, image->u8.data(), image->u8.size());
+}
+
 // From /proc/self/status; 0 if it cannot be read.
 int thread_count() {
     std::FILE* f = std::fopen("/proc/self/status", "r");
@@ -74,7 +103,7 @@ int thread_count() {
 // does), which a fork leaves behind harmlessly. A thread beyond those is clbdpt's or MPI's.
 const int threads_at_start = thread_count();
 
-// The writer's life: load the module, then serve requests until the socket closes.
+// The process's life: load the module, then serve requests until the socket closes.
 [[noreturn]] void serve(int fd, pid_t render) {
     // Ctrl-C is the render's to handle: it goes on to write what it has, through this process.
     // The render's handlers (cli/interrupt.h) are not this process's: SIGTERM simply ends it.
@@ -99,10 +128,22 @@ const int threads_at_start = thread_count();
         load_error = e.what();
     }
     for (;;) {
+        uint64_t kind;
+        if (!receive_u64(fd, &kind)) break;
+        if (kind == kRead) {
+            std::string path;
+            uint64_t own_format;
+            if (!receive_string(fd, &path) || !receive_u64(fd, &own_format)) break;
+            StoredImage image;
+            const std::string why = module ? module->read(path, own_format != 0, &image) : load_error;
+            if (!send_string(fd, why) || (why.empty() && !send_image(fd, image))) break;
+            continue;
+        }
         std::string path, temp_path;
         uint64_t width, height, is_float, pairs;
-        if (!receive_string(fd, &path) || !receive_string(fd, &temp_path) || !receive_u64(fd, &width) ||
-            !receive_u64(fd, &height) || !receive_u64(fd, &is_float) || !receive_u64(fd, &pairs))
+        if (kind != kWrite || !receive_string(fd, &path) || !receive_string(fd, &temp_path) ||
+            !receive_u64(fd, &width) || !receive_u64(fd, &height) || !receive_u64(fd, &is_float) ||
+            !receive_u64(fd, &pairs))
             break;
         ImageAttributes metadata(static_cast<size_t>(pairs));
         bool ok = true;
@@ -123,14 +164,14 @@ const int threads_at_start = thread_count();
     ::_exit(0);
 }
 
-struct Writer {
+struct IoProcess {
     std::mutex mutex;
     pid_t pid = -1;
     int fd = -1;
 
-    // Closes the socket and reaps the writer. Every write it was asked for has been answered,
-    // so it is killed rather than waited for: a render that failed early would otherwise wait
-    // for a load it no longer needs.
+    // Closes the socket and reaps the process. Every request it was sent has been answered, so
+    // it is killed rather than waited for: a render that failed early would otherwise wait for
+    // a load it no longer needs.
     void stop() {
         if (fd >= 0) ::close(fd);
         if (pid > 0) {
@@ -141,18 +182,18 @@ struct Writer {
         pid = -1;
         fd = -1;
     }
-    ~Writer() { stop(); }
+    ~IoProcess() { stop(); }
 };
 
-Writer& writer() {
-    static Writer instance;
+IoProcess& io_process() {
+    static IoProcess instance;
     return instance;
 }
 
 }  // namespace
 
-bool start_image_writer_process() {
-    Writer& w = writer();
+bool start_image_io_process() {
+    IoProcess& w = io_process();
     std::lock_guard<std::mutex> lock(w.mutex);
     if (w.pid > 0) return true;
     if (image_io_module_loaded() || threads_at_start == 0 || thread_count() != threads_at_start) return false;
@@ -176,14 +217,14 @@ bool start_image_writer_process() {
     return true;
 }
 
-std::optional<std::string> write_in_image_writer_process(const std::string& path, const std::string& temp_path,
+std::optional<std::string> write_in_image_io_process(const std::string& path, const std::string& temp_path,
                                                          int width, int height, const float* float_rgb,
                                                          const uint8_t* srgb8, const ImageAttributes& metadata) {
-    Writer& w = writer();
+    IoProcess& w = io_process();
     std::lock_guard<std::mutex> lock(w.mutex);
     const size_t values = size_t(width) * size_t(height) * 3;
-    if (w.fd < 0 || values * (float_rgb ? sizeof(float) : 1) > kImageWriterMaxBytes) return std::nullopt;
-    bool ok = send_string(w.fd, path) && send_string(w.fd, temp_path) && send_u64(w.fd, uint64_t(width)) &&
+    if (w.fd < 0 || values * (float_rgb ? sizeof(float) : 1) > kImageIoProcessMaxBytes) return std::nullopt;
+    bool ok = send_u64(w.fd, kWrite) && send_string(w.fd, path) && send_string(w.fd, temp_path) && send_u64(w.fd, uint64_t(width)) &&
               send_u64(w.fd, uint64_t(height)) && send_u64(w.fd, float_rgb ? 1 : 0) && send_u64(w.fd, metadata.size());
     for (const auto& [key, value] : metadata) ok = ok && send_string(w.fd, key) && send_string(w.fd, value);
     ok = ok && (float_rgb ? send_all(w.fd, float_rgb, values * sizeof(float)) : send_all(w.fd, srgb8, values));
@@ -193,14 +234,27 @@ std::optional<std::string> write_in_image_writer_process(const std::string& path
     return std::nullopt;
 }
 
-int image_writer_process_id() {
-    Writer& w = writer();
+std::optional<std::string> read_in_image_io_process(const std::string& path, bool own_format, StoredImage* image) {
+    IoProcess& w = io_process();
+    std::lock_guard<std::mutex> lock(w.mutex);
+    if (w.fd < 0) return std::nullopt;
+    std::string why;
+    if (send_u64(w.fd, kRead) && send_string(w.fd, path) && send_u64(w.fd, own_format ? 1 : 0) &&
+        receive_string(w.fd, &why) && (!why.empty() || receive_image(w.fd, image)))
+        return why;
+    w.stop();  // it died: the caller reads the image itself
+    *image = StoredImage();
+    return std::nullopt;
+}
+
+int image_io_process_id() {
+    IoProcess& w = io_process();
     std::lock_guard<std::mutex> lock(w.mutex);
     return w.pid;
 }
 
-void stop_image_writer_process() {
-    Writer& w = writer();
+void stop_image_io_process() {
+    IoProcess& w = io_process();
     std::lock_guard<std::mutex> lock(w.mutex);
     w.stop();
 }
