@@ -126,7 +126,8 @@ std::vector<T> spread_to_rgba(const std::vector<T>& all, size_t pixels, size_t c
                               T opaque) {
     std::vector<T> rgba(pixels * 4);
     for (size_t p = 0; p < pixels; ++p)
-        for (int c = 0; c < 4; ++c) rgba[p * 4 + size_t(c)] = source[c] < 0 ? opaque : all[p * channels + size_t(source[c])];
+        for (int c = 0; c < 4; ++c)
+            rgba[p * 4 + size_t(c)] = source[c] < 0 ? opaque : all[p * channels + size_t(source[c])];
     return rgba;
 }
 

@@ -193,9 +193,9 @@ IoProcess& io_process() {
 }  // namespace
 
 bool start_image_io_process() {
-    IoProcess& w = io_process();
-    std::lock_guard<std::mutex> lock(w.mutex);
-    if (w.pid > 0) return true;
+    IoProcess& io = io_process();
+    std::lock_guard<std::mutex> lock(io.mutex);
+    if (io.pid > 0) return true;
     if (image_io_module_loaded() || threads_at_start == 0 || thread_count() != threads_at_start) return false;
     int fds[2];
     if (::socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, fds) != 0) return false;
@@ -212,51 +212,52 @@ bool start_image_io_process() {
         serve(fds[1], render);
     }
     ::close(fds[1]);
-    w.pid = pid;
-    w.fd = fds[0];
+    io.pid = pid;
+    io.fd = fds[0];
     return true;
 }
 
 std::optional<std::string> write_in_image_io_process(const std::string& path, const std::string& temp_path,
-                                                         int width, int height, const float* float_rgb,
-                                                         const uint8_t* srgb8, const ImageAttributes& metadata) {
-    IoProcess& w = io_process();
-    std::lock_guard<std::mutex> lock(w.mutex);
+                                                     int width, int height, const float* float_rgb,
+                                                     const uint8_t* srgb8, const ImageAttributes& metadata) {
+    IoProcess& io = io_process();
+    std::lock_guard<std::mutex> lock(io.mutex);
     const size_t values = size_t(width) * size_t(height) * 3;
-    if (w.fd < 0 || values * (float_rgb ? sizeof(float) : 1) > kImageIoProcessMaxBytes) return std::nullopt;
-    bool ok = send_u64(w.fd, kWrite) && send_string(w.fd, path) && send_string(w.fd, temp_path) && send_u64(w.fd, uint64_t(width)) &&
-              send_u64(w.fd, uint64_t(height)) && send_u64(w.fd, float_rgb ? 1 : 0) && send_u64(w.fd, metadata.size());
-    for (const auto& [key, value] : metadata) ok = ok && send_string(w.fd, key) && send_string(w.fd, value);
-    ok = ok && (float_rgb ? send_all(w.fd, float_rgb, values * sizeof(float)) : send_all(w.fd, srgb8, values));
+    if (io.fd < 0 || values * (float_rgb ? sizeof(float) : 1) > kImageIoProcessMaxBytes) return std::nullopt;
+    bool ok = send_u64(io.fd, kWrite) && send_string(io.fd, path) && send_string(io.fd, temp_path) &&
+              send_u64(io.fd, uint64_t(width)) && send_u64(io.fd, uint64_t(height)) &&
+              send_u64(io.fd, float_rgb ? 1 : 0) && send_u64(io.fd, metadata.size());
+    for (const auto& [key, value] : metadata) ok = ok && send_string(io.fd, key) && send_string(io.fd, value);
+    ok = ok && (float_rgb ? send_all(io.fd, float_rgb, values * sizeof(float)) : send_all(io.fd, srgb8, values));
     std::string why;
-    if (ok && receive_string(w.fd, &why)) return why;
-    w.stop();  // it died: the caller writes the image itself
+    if (ok && receive_string(io.fd, &why)) return why;
+    io.stop();  // it died: the caller writes the image itself
     return std::nullopt;
 }
 
 std::optional<std::string> read_in_image_io_process(const std::string& path, bool own_format, StoredImage* image) {
-    IoProcess& w = io_process();
-    std::lock_guard<std::mutex> lock(w.mutex);
-    if (w.fd < 0) return std::nullopt;
+    IoProcess& io = io_process();
+    std::lock_guard<std::mutex> lock(io.mutex);
+    if (io.fd < 0) return std::nullopt;
     std::string why;
-    if (send_u64(w.fd, kRead) && send_string(w.fd, path) && send_u64(w.fd, own_format ? 1 : 0) &&
-        receive_string(w.fd, &why) && (!why.empty() || receive_image(w.fd, image)))
+    if (send_u64(io.fd, kRead) && send_string(io.fd, path) && send_u64(io.fd, own_format ? 1 : 0) &&
+        receive_string(io.fd, &why) && (!why.empty() || receive_image(io.fd, image)))
         return why;
-    w.stop();  // it died: the caller reads the image itself
+    io.stop();  // it died: the caller reads the image itself
     *image = StoredImage();
     return std::nullopt;
 }
 
 int image_io_process_id() {
-    IoProcess& w = io_process();
-    std::lock_guard<std::mutex> lock(w.mutex);
-    return w.pid;
+    IoProcess& io = io_process();
+    std::lock_guard<std::mutex> lock(io.mutex);
+    return io.pid;
 }
 
 void stop_image_io_process() {
-    IoProcess& w = io_process();
-    std::lock_guard<std::mutex> lock(w.mutex);
-    w.stop();
+    IoProcess& io = io_process();
+    std::lock_guard<std::mutex> lock(io.mutex);
+    io.stop();
 }
 
 }  // namespace clbdpt
