@@ -52,7 +52,7 @@ __kernel void render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, __global float
     uint rays_traced = 0;
     SceneData scene = SCENE_DATA_FROM_KERNEL_ARGS(&rays_traced);
 
-    int pixel = render_item_pixel(params.first_pixel + gid, params.width, params.pixel_stride);
+    int pixel = render_item_pixel(params.first_pixel + gid, params.width, params.height, params.pixel_stride);
     int px = pixel % params.width, py = pixel / params.width;
     /* The whole sample, both subpaths and every connection, draws from the pixel's own sample
      * vector at the draws cl/sample_dimensions.h assigns. */

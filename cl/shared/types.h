@@ -209,8 +209,8 @@ typedef struct {
      * subpaths are joined by connections with s >= 2 and t >= 2. */
     float light_subpaths;
     clbdpt_int inner_connections;
-    /* 1: the launch's work items are pixels first_pixel ..; k > 1: items run over every k-th
-     * pixel of every k-th row (render_item_pixel), the strategy pilot's sparse passes. */
+    /* 1: the launch's work items are pixels first_pixel ..; k > 1: items run over one pixel of
+     * each k x k block (render_item_pixel), the strategy pilot's sparse passes. */
     clbdpt_int pixel_stride;
     /* The sample and seed whose pixel-position draw the launch uses: sample_index and seed,
      * except in the pilot's paired passes, which share positions to tell the variance of the
@@ -229,10 +229,30 @@ inline clbdpt_int render_item_count(clbdpt_int width, clbdpt_int height, clbdpt_
     return ((width + stride - 1) / stride) * ((height + stride - 1) / stride);
 }
 
-/* The pixel (y * width + x) of work item `item` in a launch with pixel_stride `stride`. */
-inline clbdpt_int render_item_pixel(clbdpt_int item, clbdpt_int width, clbdpt_int stride) {
+/* The pixel (y * width + x) of work item `item` in a launch with pixel_stride `stride`: for
+ * k > 1, one pixel of the item's k x k block, at a position hashed from the block's number. A
+ * fixed corner lines the sparse grid up with a scene's axis-aligned edges, where a path tracer's
+ * error sits (on the Cornell box, 95% of a 1-spp pt image's squared error is in 0.5% of its
+ * pixels, at the light's outline): the mean of a 1-spp pt image's squared error over the ten
+ * stride-5 grids with corners (i, 0) and (i, 2) ranged 0.0032-0.14, 5.3e-2 over all pixels.
+ * The pilot chose by where its grid fell. The hash is fixed, so every pass of a stride sees the
+ * same pixels. */
+inline clbdpt_int render_item_pixel(clbdpt_int item, clbdpt_int width, clbdpt_int height, clbdpt_int stride) {
     clbdpt_int columns = (width + stride - 1) / stride;
-    return (item / columns) * stride * width + (item % columns) * stride;
+    clbdpt_int x = (item % columns) * stride, y = (item / columns) * stride;
+    if (stride > 1) {
+        clbdpt_uint h = (clbdpt_uint)item * 0x9e3779b9u; /* lowbias32 of the block's number */
+        h ^= h >> 16;
+        h *= 0x7feb352du;
+        h ^= h >> 15;
+        h *= 0x846ca68bu;
+        h ^= h >> 16;
+        clbdpt_int block_width = width - x < stride ? width - x : stride;
+        clbdpt_int block_height = height - y < stride ? height - y : stride;
+        x += (clbdpt_int)((h & 0xffffu) % (clbdpt_uint)block_width);
+        y += (clbdpt_int)((h >> 16) % (clbdpt_uint)block_height);
+    }
+    return y * width + x;
 }
 
 /* A contribution that lands at another pixel than the work item's own (t = 1 strategies).

@@ -524,6 +524,7 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
             for (const StrategyCandidate& c : pilot.candidates)
                 p["candidates"].push_back({{"name", c.name},
                                            {"variance_transport", c.variance_transport},
+                                           {"variance_transport_standard_error", c.variance_transport_standard_error},
                                            {"variance_pixel", c.variance_pixel},
                                            {"seconds_per_pass", c.seconds_per_pass},
                                            {"predicted_spp", c.predicted_spp},

@@ -15,6 +15,8 @@ constexpr int kPilotItems = 8192;
 constexpr int kPilotPassesPerCandidate = 3;
 // The pilot may cost at most this share of the render's samples.
 constexpr double kPilotShare = 0.1;
+// How many standard errors a candidate's transport variance counts high (see the choice).
+constexpr double kRiskStandardErrors = 2.0;
 // Variance of a 2D discontinuous integrand under Owen-scrambled Sobol points: O(N^-3/2).
 constexpr double kPixelVarianceExponent = 1.5;
 
@@ -22,27 +24,90 @@ double seconds_between(std::chrono::steady_clock::time_point a, std::chrono::ste
     return std::chrono::duration<double>(b - a).count();
 }
 
-int pilot_stride(int width, int height) {
-    const double ratio = double(width) * double(height) / kPilotItems;
-    return std::max(1, int(std::lround(std::sqrt(ratio))));
+// Fewer pixels than this (or than the film has) give variance estimates too noisy to choose by.
+constexpr int kPilotMinItems = 2048;
+
+uint64_t pilot_samples_at(int width, int height, int stride) {
+    return uint64_t(render_item_count(width, height, stride)) * kPilotPassesPerCandidate * strategy_candidates().size();
 }
 
-// Half the mean squared difference of two sparse passes over the grid's pixels and channels:
+// The sparse grid's stride when the render's samples do not limit it: about kPilotItems pixels.
+int full_pilot_stride(int width, int height) {
+    return std::max(1, int(std::lround(std::sqrt(double(width) * double(height) / kPilotItems))));
+}
+
+// The stride for a render of `spp` samples per pixel: the full grid's, or a coarser one where
+// the render is short, so that the pilot stays within kPilotShare of the render's samples (a
+// 128x128 film of 64 spp gets one pixel of each 2x2 block). 0 when no grid of at least
+// kPilotMinItems pixels (or the whole film, if smaller) fits: the render then goes without.
+int pilot_stride(int width, int height, int spp) {
+    const double pixels = double(width) * double(height);
+    const double allowed = kPilotShare * pixels * double(std::max(spp, 0));
+    const int min_items = int(std::min<double>(kPilotMinItems, pixels));
+    for (int stride = full_pilot_stride(width, height); render_item_count(width, height, stride) >= min_items; ++stride)
+        if (double(pilot_samples_at(width, height, stride)) <= allowed) return stride;
+    return 0;
+}
+
+// Half the squared difference of two sparse passes over the grid's pixels (render_item_pixel)
+// and channels, summed into kVarianceGroups interleaved groups of pixels (the grid's pixel
+// number modulo the group count, so that each group spans the whole image). A group's mean is
 // the variance of one full-density sample. The light image of a sparse pass holds the light
 // subpaths of 1/share of the pixels, so its variance is share times that of a full pass.
-double one_sample_variance(const Film& a, const Film& b, int stride, double light_share) {
-    double sum = 0;
-    long count = 0;
-    for (int y = 0; y < a.height; y += stride)
-        for (int x = 0; x < a.width; x += stride)
-            for (int c = 0; c < 3; ++c) {
-                const size_t i = (size_t(y) * a.width + x) * 3 + c;
-                const double dc = a.camera_sum[i] - b.camera_sum[i];
-                const double dl = a.light_sum[i] - b.light_sum[i];
-                sum += dc * dc + dl * dl * light_share;
-                ++count;
-            }
-    return count ? sum / (2.0 * double(count)) : 0;
+constexpr int kVarianceGroups = 8;
+struct GroupedVariance {
+    double sum[kVarianceGroups] = {};
+    long count[kVarianceGroups] = {};  // pixels x channels
+    double pixel_sum_squares = 0;      // of each pixel's term, summed over its channels
+    long pixels = 0;
+    double mean() const {
+        double s = 0;
+        long n = 0;
+        for (int g = 0; g < kVarianceGroups; ++g) s += sum[g], n += count[g];
+        return n ? s / double(n) : 0;
+    }
+    double group_mean(int g) const { return count[g] ? sum[g] / double(count[g]) : 0; }
+    // The standard error of mean(), from the spread of the pixels' terms.
+    double standard_error() const {
+        if (pixels < 2) return 0;
+        const double pixel_mean = 3.0 * mean();
+        const double spread = std::max(0.0, pixel_sum_squares / double(pixels) - pixel_mean * pixel_mean);
+        return std::sqrt(spread / double(pixels - 1)) / 3.0;
+    }
+};
+
+GroupedVariance one_sample_variance(const Film& a, const Film& b, int stride, double light_share) {
+    GroupedVariance v;
+    const int items = render_item_count(a.width, a.height, stride);
+    for (int item = 0; item < items; ++item) {
+        const int g = item % kVarianceGroups;
+        double pixel_term = 0;
+        for (int c = 0; c < 3; ++c) {
+            const size_t i = size_t(render_item_pixel(item, a.width, a.height, stride)) * 3 + c;
+            const double dc = a.camera_sum[i] - b.camera_sum[i];
+            const double dl = a.light_sum[i] - b.light_sum[i];
+            pixel_term += 0.5 * (dc * dc + dl * dl * light_share);
+            ++v.count[g];
+        }
+        v.sum[g] += pixel_term;
+        v.pixel_sum_squares += pixel_term * pixel_term;
+        ++v.pixels;
+    }
+    return v;
+}
+
+// The variance from where in the pixel a sample lands: whole minus transport, as the median over
+// the pixel groups. Edges spread over many pixels, while one firefly in pass c (whose transport
+// is independent of pass a's) lands in `whole` alone and, in the plain mean, passes for edges:
+// on veach-mis a path tracer's v_pixel came out 6.3, 1.4 and 9.4 in three pilots with the plain
+// mean, and 0, 0.07 and 0.013 with the median (its transport variance: 16, 3.0 and 0.72). The
+// transport variance keeps the plain mean: a firefly there is the candidate's own, and the
+// render will have it too.
+double pixel_variance(const GroupedVariance& whole, const GroupedVariance& transport) {
+    double d[kVarianceGroups];
+    for (int g = 0; g < kVarianceGroups; ++g) d[g] = whole.group_mean(g) - transport.group_mean(g);
+    std::sort(d, d + kVarianceGroups);
+    return std::max(0.0, 0.5 * (d[kVarianceGroups / 2 - 1] + d[kVarianceGroups / 2]));
 }
 
 }  // namespace
@@ -72,14 +137,7 @@ std::string describe_strategy_mix(Integrator integrator, float light_subpaths, b
     return buf;
 }
 
-uint64_t strategy_pilot_samples(int width, int height) {
-    return uint64_t(render_item_count(width, height, pilot_stride(width, height))) * kPilotPassesPerCandidate *
-           strategy_candidates().size();
-}
-
-bool strategy_pilot_fits(int width, int height, int spp) {
-    return double(strategy_pilot_samples(width, height)) <= kPilotShare * double(width) * double(height) * spp;
-}
+bool strategy_pilot_fits(int width, int height, int spp) { return pilot_stride(width, height, spp) > 0; }
 
 StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene, const RenderOptions& options,
                                  int spp, double time_budget, RenderStats* stats) {
@@ -89,7 +147,9 @@ StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene
     pilot.spp = spp;
     const int k = int(pilot.candidates.size());
     const int width = scene.camera.width, height = scene.camera.height;
-    pilot.pixel_stride = pilot_stride(width, height);
+    // A timed render has no sample count to share: it gets the full grid (main.cpp gives it a
+    // pilot only when its budget is long enough).
+    pilot.pixel_stride = spp > 0 ? std::max(1, pilot_stride(width, height, spp)) : full_pilot_stride(width, height);
     const int items = render_item_count(width, height, pilot.pixel_stride);
     const double full_per_sparse = double(width) * double(height) / items;
 
@@ -112,7 +172,11 @@ StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene
     const uint32_t seed_a = options.seed ^ 0x6a09e667u, seed_b = options.seed ^ 0xbb67ae85u,
                    seed_c = options.seed ^ 0x3c6ef372u;
     std::vector<std::vector<Film>> films(size_t(k), std::vector<Film>(kPilotPassesPerCandidate, Film(width, height)));
-    std::vector<double> seconds(size_t(k), 0.0);
+    // Each candidate's fastest pass: load from elsewhere (the image I/O process loads its
+    // libraries during the pilot) and a first pass's one-off costs only ever add time, and a
+    // pass lasts 5-50 ms. With the mean of the three, a slow pass of full bdpt once handed
+    // lamp-ceiling to the mix without inner connections, and a slow pass of pt handed sky to bdpt.
+    std::vector<double> seconds(size_t(k), 1e300);
     for (int round = 0; round < kPilotPassesPerCandidate; ++round)
         for (int i = 0; i < k; ++i) {
             const StrategyCandidate& c = pilot.candidates[size_t(i)];
@@ -124,20 +188,29 @@ StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene
             pass.position_seed = round == 2 ? seed_c : seed_a;
             const Clock::time_point pass_start = Clock::now();
             r->render_pass(films[size_t(i)][size_t(round)], pass);
-            seconds[size_t(i)] += seconds_between(pass_start, Clock::now());
+            seconds[size_t(i)] = std::min(seconds[size_t(i)], seconds_between(pass_start, Clock::now()));
         }
 
     for (int i = 0; i < k; ++i) {
         StrategyCandidate& c = pilot.candidates[size_t(i)];
         const std::vector<Film>& f = films[size_t(i)];
-        c.variance_transport = one_sample_variance(f[0], f[1], pilot.pixel_stride, full_per_sparse);
-        c.variance_pixel = std::max(0.0, one_sample_variance(f[0], f[2], pilot.pixel_stride, full_per_sparse) -
-                                             c.variance_transport);
-        c.seconds_per_pass = seconds[size_t(i)] / kPilotPassesPerCandidate * full_per_sparse;
+        const GroupedVariance transport = one_sample_variance(f[0], f[1], pilot.pixel_stride, full_per_sparse);
+        const GroupedVariance whole = one_sample_variance(f[0], f[2], pilot.pixel_stride, full_per_sparse);
+        c.variance_transport = transport.mean();
+        c.variance_transport_standard_error = transport.standard_error();
+        c.variance_pixel = pixel_variance(whole, transport);
+        c.seconds_per_pass = seconds[size_t(i)] * full_per_sparse;
         const double n = time_budget > 0 && c.seconds_per_pass > 0 ? std::max(1.0, time_budget / c.seconds_per_pass)
                                                                     : double(std::max(spp, 1));
         c.predicted_spp = n;
-        c.predicted_mse = c.variance_transport / n + c.variance_pixel / std::pow(n, kPixelVarianceExponent);
+        // Heavy tails (a path tracer's fireflies in fog) make a sparse grid's variance come out
+        // low more often than high, and a candidate chosen for a variance it does not have can
+        // cost 25x (without this, fog-spot at 128x128 got pt, 0.04-0.07x of bdpt's efficiency
+        // there, in one of three pilots); so each transport variance counts
+        // kRiskStandardErrors standard errors high.
+        const double risky_transport =
+            c.variance_transport + kRiskStandardErrors * c.variance_transport_standard_error;
+        c.predicted_mse = risky_transport / n + c.variance_pixel / std::pow(n, kPixelVarianceExponent);
         const double cost = c.predicted_mse * n * c.seconds_per_pass;
         c.efficiency = cost > 0 ? 1.0 / cost : 0.0;
         if (c.efficiency > pilot.candidates[size_t(pilot.chosen)].efficiency) pilot.chosen = i;

@@ -3,19 +3,23 @@
 // makes, by estimated variance times cost. The default `clbdpt render` (--integrator auto)
 // runs it; --integrator bdpt|pt|lt and --light-subpaths / --connections fix the choice by hand.
 //
-// The pilot renders a sparse grid of pixels (about kPilotItems of them) three times per
-// candidate, on the first device, and throws the passes away afterwards (they are not
-// stratified with the render's own samples, and adding them would cost more than it gives):
+// The pilot renders a sparse grid of pixels (one of each k x k block, about 8192 of them, fewer
+// for a short render) three times per candidate, on the first device, and throws the passes
+// away afterwards (they are not stratified with the render's own samples, and adding them would
+// cost more than it gives):
 //   a, b  independent samples that share their pixel positions: (a - b)^2 / 2 estimates the
 //         variance of light transport within the pixel, v_transport;
 //   a, c  fully independent samples: (a - c)^2 / 2 estimates the whole variance of one sample,
-//         of which v_pixel = whole - v_transport comes from where in the pixel it lands.
+//         of which v_pixel = whole - v_transport comes from where in the pixel it lands
+//         (the median over 8 interleaved groups of pixels, so that a firefly in pass c does
+//         not pass for edges).
 // A stratified sampler removes the two at different rates: the pixel integral of an image with
 // edges (a visible light's outline) is a 2D discontinuous integrand, whose variance under
 // Owen-scrambled Sobol points falls as N^-3/2, while transport keeps close to N^-1. So the
 // squared error of N samples is predicted as v_transport / N + v_pixel / N^1.5, and the
-// candidate with the least error times time (N x seconds per sample) is chosen: the inverse of
-// Grittmann et al.'s efficiency. The light image (t = 1) of a sparse pass holds only the
+// candidate with the least error times time (N x seconds per sample, from its fastest pass) is
+// chosen: the inverse of Grittmann et al.'s efficiency. v_transport counts two standard errors
+// high, so that a candidate whose fireflies the grid happened to miss is not chosen for them. The light image (t = 1) of a sparse pass holds only the
 // sparse pixels' light subpaths; its variance is scaled to a full pass.
 #pragma once
 
@@ -36,6 +40,7 @@ struct StrategyCandidate {
     // Per pixel and channel, of one sample: within the pixel (transport) and from the position
     // in the pixel.
     double variance_transport = 0;
+    double variance_transport_standard_error = 0;  // over the pilot's pixels
     double variance_pixel = 0;
     double seconds_per_pass = 0;    // a full pass, scaled from the sparse ones
     double predicted_spp = 0;       // what the render will reach (given, or from a time budget)
@@ -62,9 +67,9 @@ struct StrategyPilot {
     const StrategyCandidate& choice() const { return candidates[size_t(chosen)]; }
 };
 
-// Samples the pilot traces for a film of `pixels` pixels, and whether it is worth running for a
-// render of `spp` samples per pixel (it may cost at most a tenth of the render's samples).
-uint64_t strategy_pilot_samples(int width, int height);
+// Whether the pilot is worth running for a render of `spp` samples per pixel: it may cost at
+// most a tenth of the render's samples, on a sparse grid of at least 2048 pixels (or the whole
+// film, if smaller).
 bool strategy_pilot_fits(int width, int height, int spp);
 
 // Renders the pilot of every candidate on `device` (stats gain its samples, rays and build
