@@ -590,10 +590,11 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
     if (args.verbose && run_pilot)
         for (const StrategyCandidate& c : pilot.candidates)
             std::fprintf(stderr,
-                         "clbdpt: pilot: %-56s variance per sample: transport %.3g, pixel %.3g; %.3f s/pass; "
+                         "clbdpt: pilot: %-56s variance per sample: transport %.3g +- %.2g, pixel %.3g; %.3f s/pass; "
                          "predicted MSE %.3g at %.0f spp; efficiency %.3g%s\n",
-                         c.name.c_str(), c.variance_transport, c.variance_pixel, c.seconds_per_pass, c.predicted_mse,
-                         c.predicted_spp, c.efficiency, &c == &pilot.choice() ? "  <- chosen" : "");
+                         c.name.c_str(), c.variance_transport, c.variance_transport_standard_error, c.variance_pixel,
+                         c.seconds_per_pass, c.predicted_mse, c.predicted_spp, c.efficiency,
+                         &c == &pilot.choice() ? "  <- chosen" : "");
     if (interrupted_by != 0) {
         // One line: what was saved. (A non-finite sample, if any, is still reported below.)
         const std::string of_planned = options.time_budget > 0 ? "" : " of " + std::to_string(options.spp);

@@ -224,7 +224,8 @@ void Renderer::collect(RenderedItems& out, const PassSpec& pass, int first_item,
     // Item i of this launch is item first_item - out.first_item + i of `out`.
     const int offset = first_item - out.first_item;
     for (int i = 0; i < item_count; ++i) {
-        const int pixel = render_item_pixel(first_item + i, scene_.camera.width, scene_.camera.height, pass.pixel_stride);
+        const int pixel =
+            render_item_pixel(first_item + i, scene_.camera.width, scene_.camera.height, pass.pixel_stride);
         float* dst = &out.camera[size_t(offset + i) * 3];
         if (!sample_is_finite(i)) {
             drop_sample(out, i, pixel, pass);

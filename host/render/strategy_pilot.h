@@ -19,8 +19,9 @@
 // squared error of N samples is predicted as v_transport / N + v_pixel / N^1.5, and the
 // candidate with the least error times time (N x seconds per sample, from its fastest pass) is
 // chosen: the inverse of Grittmann et al.'s efficiency. v_transport counts two standard errors
-// high, so that a candidate whose fireflies the grid happened to miss is not chosen for them. The light image (t = 1) of a sparse pass holds only the
-// sparse pixels' light subpaths; its variance is scaled to a full pass.
+// high, so that a candidate whose fireflies the grid happened to miss is not chosen for them.
+// The light image (t = 1) of a sparse pass holds only the sparse pixels' light subpaths; its
+// variance is scaled to a full pass.
 #pragma once
 
 #include <cstdint>
