@@ -350,7 +350,11 @@ inv = np.linalg.inv(axes)
 rows = [list(inv[a]) + [float(-inv[a] @ o - lo[a])] for a in range(3)]
 print(json.dumps({"size": size, "world_to_grid": rows}))
 """
-    res = subprocess.run(["/usr/bin/python3", "-c", script, path, name, out], check=True, capture_output=True, text=True)
+    res = subprocess.run(["/usr/bin/python3", "-c", script, path, name, out], capture_output=True, text=True)
+    if res.returncode != 0:
+        last = (res.stderr.strip().splitlines() or ["exit status %d" % res.returncode])[-1]
+        hint = " (apt-get install python3-openvdb)" if "pyopenvdb" in res.stderr else ""
+        raise NotConvertible(f"cannot read the grid '{name}' of {path}: {last}{hint}")
     meta = json.loads(res.stdout)
     return meta["size"], meta["world_to_grid"]
 
