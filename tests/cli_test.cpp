@@ -377,3 +377,44 @@ TEST_F(CliTest, HelpDocumentsTheOptions) {
 }
 
 }  // namespace
+
+// Adaptive sampling (render/adaptive.h) adds samples where neighbours are noisy, on the Cornell
+// box the light's outline, and nothing else: a pixel it did not refine is the same as without
+// it, bit for bit, and the image stays finite. Off, and where it cannot run (zsobol), the stats
+// say so.
+TEST_F(CliTest, AdaptiveSamplingRefinesSomePixelsAndLeavesTheRest) {
+    const std::string scene =
+        " " + std::string(CLBDPT_SCENES_DIR) + "/cornell-box/cornell-box.json --width 48 --height 48 --spp 16 --integrator pt";
+    CommandResult on = run("render" + scene + " -o " + out("on.exr") + " --stats " + out("on.json"));
+    ASSERT_EQ(on.status, 0) << on.output;
+    CommandResult off = run("render" + scene + " --adaptive off -o " + out("off.exr") + " --stats " + out("off.json"));
+    ASSERT_EQ(off.status, 0) << off.output;
+    std::ifstream in_on(out("on.json")), in_off(out("off.json"));
+    const nlohmann::json j_on = nlohmann::json::parse(in_on), j_off = nlohmann::json::parse(in_off);
+    ASSERT_TRUE(j_on["adaptive"]["enabled"].get<bool>()) << j_on.dump(2);
+    const uint64_t extra = j_on["adaptive"]["extra_samples"].get<uint64_t>();
+    const uint64_t refined = j_on["adaptive"]["pixels_refined"].get<uint64_t>();
+    EXPECT_GT(refined, 0u);
+    EXPECT_LT(refined, 48u * 48u / 4) << "only the light's outline is refined";
+    EXPECT_GE(extra, refined * 16u);
+    EXPECT_EQ(j_on["samples"].get<uint64_t>(), j_off["samples"].get<uint64_t>() + extra);
+    EXPECT_FALSE(j_off["adaptive"]["enabled"].get<bool>());
+    EXPECT_NE(on.output.find("adaptive sampling"), std::string::npos) << on.output;
+
+    int w = 0, h = 0;
+    const std::vector<float> a = clbdpt::read_image_rgb(out("on.exr"), &w, &h);
+    const std::vector<float> b = clbdpt::read_image_rgb(out("off.exr"), &w, &h);
+    ASSERT_EQ(a.size(), b.size());
+    size_t changed = 0;
+    for (size_t i = 0; i < a.size(); i += 3) {
+        ASSERT_TRUE(std::isfinite(a[i]) && std::isfinite(a[i + 1]) && std::isfinite(a[i + 2]));
+        changed += a[i] != b[i] || a[i + 1] != b[i + 1] || a[i + 2] != b[i + 2];
+    }
+    EXPECT_GT(changed, 0u);
+    EXPECT_LE(changed, refined) << "a pixel without extra samples is unchanged";
+
+    CommandResult z = run("render" + scene + " --sampler zsobol -o " + out("z.exr") + " --stats " + out("z.json"));
+    ASSERT_EQ(z.status, 0) << z.output;
+    std::ifstream in_z(out("z.json"));
+    EXPECT_FALSE(nlohmann::json::parse(in_z)["adaptive"]["enabled"].get<bool>());
+}

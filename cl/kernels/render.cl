@@ -52,18 +52,26 @@ __kernel void render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, __global float
     uint rays_traced = 0;
     SceneData scene = SCENE_DATA_FROM_KERNEL_ARGS(&rays_traced);
 
-    int pixel = render_item_pixel(params.first_pixel + gid, params.width, params.height, params.pixel_stride);
+    int item = params.first_pixel + gid, pixel;
+    uint sample_index = params.sample_index, position_sample_index = params.position_sample_index;
+    if (params.run_length > 0) {
+        pixel = params.run_pixel + item % params.run_length;
+        sample_index += (uint)(item / params.run_length);
+        position_sample_index += (uint)(item / params.run_length);
+    } else {
+        pixel = render_item_pixel(item, params.width, params.height, params.pixel_stride);
+    }
     int px = pixel % params.width, py = pixel / params.width;
     /* The whole sample, both subpaths and every connection, draws from the pixel's own sample
      * vector at the draws cl/sample_dimensions.h assigns. */
 #ifdef SAMPLER_ZSOBOL
-    Rng rng = rng_init_zsobol((uint)px, (uint)py, params.sample_index, params.seed, params.zsobol_log2_spp,
+    Rng rng = rng_init_zsobol((uint)px, (uint)py, sample_index, params.seed, params.zsobol_log2_spp,
                               params.zsobol_base4_digits);
-    Rng position_rng = rng_init_zsobol((uint)px, (uint)py, params.position_sample_index, params.position_seed,
+    Rng position_rng = rng_init_zsobol((uint)px, (uint)py, position_sample_index, params.position_seed,
                                        params.zsobol_log2_spp, params.zsobol_base4_digits);
 #else
-    Rng rng = rng_init((uint)pixel, params.sample_index, params.seed);
-    Rng position_rng = rng_init((uint)pixel, params.position_sample_index, params.position_seed);
+    Rng rng = rng_init((uint)pixel, sample_index, params.seed);
+    Rng position_rng = rng_init((uint)pixel, position_sample_index, params.position_seed);
 #endif
     rng_seek(&position_rng, SAMPLE_DRAW_PIXEL);
     float2 raster = (float2)((float)px, (float)py) + rng_next2(&position_rng);
@@ -72,7 +80,7 @@ __kernel void render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, __global float
     sum.L = (float3)(0.0f);
     sum.bad_strategy = -1;
 #ifdef DEBUG_NAN_PIXEL
-    sum.poisoned = pixel == DEBUG_NAN_PIXEL && params.sample_index == 0;
+    sum.poisoned = pixel == DEBUG_NAN_PIXEL && sample_index == 0;
 #endif
     path_tracer_sample(&scene, &rng, raster, &sum);
     camera_out[gid] = (float4)(sum.L.x, sum.L.y, sum.L.z,
@@ -128,7 +136,7 @@ __kernel void render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, __global float
              * traced for only a fraction of the samples). */
             float3 c = unweighted * (weight / strategy_sample_count(&mix, s, t));
 #ifdef DEBUG_NAN_PIXEL
-            if (pixel == DEBUG_NAN_PIXEL && params.sample_index == 0) c = (float3)(NAN);
+            if (pixel == DEBUG_NAN_PIXEL && sample_index == 0) c = (float3)(NAN);
 #endif
             /* NaN or Inf in any channel makes the difference NaN (isfinite on each channel
              * cost PoCL 15% of a path tracer's samples per second). */

@@ -221,7 +221,13 @@ typedef struct {
      * base-4 digits of the image-wide sample index. */
     clbdpt_int zsobol_log2_spp;
     clbdpt_int zsobol_base4_digits;
-    clbdpt_int pad0, pad1, pad2; /* the maximum depth is the kernel's MAX_DEPTH, not a parameter */
+    /* run_length > 0: the launch renders many samples of a run of pixels, run_pixel ..
+     * run_pixel + run_length - 1 (adaptive sampling's extra samples, host/render/adaptive.h):
+     * item i is pixel run_pixel + i % run_length at sample sample_index + i / run_length (and
+     * position sample position_sample_index + i / run_length), pixel_stride unused. */
+    clbdpt_int run_pixel;
+    clbdpt_int run_length;
+    clbdpt_int pad2; /* the maximum depth is the kernel's MAX_DEPTH, not a parameter */
 } RenderParams;
 
 /* Work items of a pass with pixel_stride `stride` over a width x height film. */

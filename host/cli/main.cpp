@@ -18,6 +18,7 @@
 #include "film/image_io.h"
 #include "film/image_io_process.h"
 #include "mpi/cluster.h"
+#include "render/adaptive.h"
 #include "render/aov.h"
 #include "render/automatic_view.h"
 #include "render/device_scene.h"
@@ -48,6 +49,7 @@ struct RenderArgs {
     float light_subpaths = -1;  // < 0: not given
     std::string connections;    // "on", "off" or empty
     std::string sampler;  // empty: sobol
+    std::string adaptive = "on";
     std::string aov;
     std::string strategy_images;
     bool unweighted = false;
@@ -470,6 +472,16 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
         std::fprintf(stderr, "\nclbdpt: warning: device %s; it left the render and its pass went to the others\n",
                      what.c_str());
     };
+    // Adaptive sampling (render/adaptive.h) wherever its extra samples can follow the passes:
+    // not for a time budget (no sample count to add to), resumed or checkpointed renders (a
+    // checkpoint holds whole passes), several processes, zsobol (neighbouring pixels share a
+    // sequence) or strategy images; and from 8 spp on, below which a pixel's variance is too
+    // rough to plan from.
+    const bool adaptive = args.adaptive == "on" && options.time_budget <= 0 && options.spp >= kAdaptiveMinSpp &&
+                          !resumed && checkpoint_path.empty() && cluster.size() == 1 &&
+                          options.sampler != SamplerKind::ZSobol &&
+                          options.strategy_images == RenderOptions::StrategyImages::Off;
+    options.track_variance = adaptive;
     RenderStats st;
     const double seconds_before_passes = seconds_since(start) - pilot.seconds;
     Film film = render_image(renderer_list, options, &st, schedule, remote_list);
@@ -479,6 +491,22 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
         bar.finish();
         std::fprintf(stderr, "clbdpt: interrupted before the first pass was done: nothing written\n");
         return 128 + interrupted_by;
+    }
+    AdaptivePlan adaptive_plan;
+    double adaptive_seconds = 0;
+    if (adaptive && interrupted_by == 0) {
+        const auto adaptive_start = Clock::now();
+        adaptive_plan = plan_adaptive_samples(film);
+        render_adaptive_samples(*renderer_list.front(), adaptive_plan, film, &st);
+        adaptive_seconds = seconds_since(adaptive_start);
+        st.seconds += adaptive_seconds;
+        // The renderers' profiles (--profile) now hold the extra samples' launches too.
+        st.profile = RenderProfile();
+        for (Renderer* r : renderer_list) {
+            st.profile.kernel_seconds += r->stats().profile.kernel_seconds;
+            st.profile.transfer_seconds += r->stats().profile.transfer_seconds;
+            st.profile.accumulate_seconds += r->stats().profile.accumulate_seconds;
+        }
     }
     if (run_pilot) {
         st.add(pilot_stats);
@@ -496,6 +524,8 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
     meta.strings.push_back({"clbdpt:strategy_mix", strategy_mix});
     meta.strings.push_back({"clbdpt:sampler", sampler_name(options.sampler)});
     meta.strings.push_back({"clbdpt:spp", std::to_string(film.spp)});
+    if (adaptive)
+        meta.strings.push_back({"clbdpt:adaptive_extra_samples", std::to_string(adaptive_plan.extra_samples)});
     meta.strings.push_back({"clbdpt:max_depth", std::to_string(options.max_depth)});
     meta.strings.push_back({"clbdpt:seed", std::to_string(options.seed)});
     meta.strings.push_back({"clbdpt:seconds", std::to_string(st.seconds)});
@@ -533,6 +563,16 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
             j["strategy_pilot"] = p;
         }
         j["sampler"] = sampler_name(options.sampler);
+        nlohmann::json a;
+        a["enabled"] = adaptive;
+        if (adaptive) {
+            a["extra_samples"] = adaptive_plan.extra_samples;
+            a["pixels_refined"] = adaptive_plan.pixels_refined;
+            a["max_tier"] = adaptive_plan.max_tier;
+            a["u_mean"] = adaptive_plan.u_mean;
+            a["seconds"] = adaptive_seconds;
+        }
+        j["adaptive"] = a;
         j["width"] = width;
         j["height"] = height;
         j["spp"] = film.spp;
@@ -606,6 +646,10 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
                      strategy_mix.c_str(), film.spp, width, height, st.seconds, sps * 1e-6, rps * 1e-6,
                      st.program_from_cache ? "cached" : "build", st.build_seconds, output.c_str());
         if (!mix_note.empty()) std::fprintf(stderr, "clbdpt: strategy mix %s\n", mix_note.c_str());
+        if (adaptive_plan.extra_samples > 0)
+            std::fprintf(stderr, "clbdpt: adaptive sampling: %.1f%% more samples, in %llu pixels (%.2f s)\n",
+                         100.0 * double(adaptive_plan.extra_samples) / (double(film.spp) * width * height),
+                         (unsigned long long)adaptive_plan.pixels_refined, adaptive_seconds);
         if (st.device_shares.size() > 1)
             for (const RenderStats::DeviceShare& d : st.device_shares)
                 std::fprintf(stderr, "clbdpt: %s: %.1f%% of the samples, %.3f M samples/s%s\n", d.name.c_str(),
@@ -679,6 +723,12 @@ int main(int argc, char** argv) {
                        "samples; zsobol: the same points ordered over the image in Morton order, stratified over "
                        "neighbouring pixels too (needs --spp); independent: uniform random numbers")
         ->check(CLI::IsMember({"independent", "sobol", "zsobol"}));
+    render->add_option("--adaptive", args.adaptive,
+                       "on (default): after the spp passes, up to 16x the samples for the pixels whose neighbours are "
+                       "noisiest (at most as many extra samples as the passes had; sobol and independent samplers, "
+                       "--spp 8 or more, one process, no --time, --checkpoint or --resume); off: spp samples for "
+                       "every pixel")
+        ->check(CLI::IsMember({"on", "off"}));
     render->add_option("--aov", args.aov, "Debug render of the first hit: normal, albedo or depth")
         ->check(CLI::IsMember({"normal", "albedo", "depth"}));
     render->add_option("--strategy-images", args.strategy_images,

@@ -134,8 +134,8 @@ CLBDPT_CHECK_FIELD(RenderParams, position_sample_index, 36);
 CLBDPT_CHECK_FIELD(RenderParams, position_seed, 40);
 CLBDPT_CHECK_FIELD(RenderParams, zsobol_log2_spp, 44);
 CLBDPT_CHECK_FIELD(RenderParams, zsobol_base4_digits, 48);
-CLBDPT_CHECK_FIELD(RenderParams, pad0, 52);
-CLBDPT_CHECK_FIELD(RenderParams, pad1, 56);
+CLBDPT_CHECK_FIELD(RenderParams, run_pixel, 52);
+CLBDPT_CHECK_FIELD(RenderParams, run_length, 56);
 CLBDPT_CHECK_FIELD(RenderParams, pad2, 60);
 
 CLBDPT_CHECK_STRUCT(SplatRecord, 16, 4);

@@ -5,6 +5,10 @@ namespace clbdpt {
 void Film::add(const Film& other) {
     for (size_t i = 0; i < camera_sum.size(); ++i) camera_sum[i] += other.camera_sum[i];
     for (size_t i = 0; i < light_sum.size(); ++i) light_sum[i] += other.light_sum[i];
+    if (!other.camera_sq.empty()) {
+        if (camera_sq.empty()) camera_sq.assign(other.camera_sq.size(), 0.0);
+        for (size_t i = 0; i < camera_sq.size(); ++i) camera_sq[i] += other.camera_sq[i];
+    }
     if (!other.strategy_sum.empty()) {
         if (strategy_sum.empty()) {
             strategy_sum.assign(other.strategy_sum.size(), 0.0);
@@ -18,7 +22,14 @@ void Film::add(const Film& other) {
 std::vector<float> Film::image() const {
     std::vector<float> out(camera_sum.size());
     const double inv = spp > 0 ? 1.0 / spp : 0.0;
-    for (size_t i = 0; i < out.size(); ++i) out[i] = float((camera_sum[i] + light_sum[i]) * inv);
+    if (extra_samples.empty()) {
+        for (size_t i = 0; i < out.size(); ++i) out[i] = float((camera_sum[i] + light_sum[i]) * inv);
+        return out;
+    }
+    for (size_t i = 0; i < out.size(); ++i) {
+        const double camera_samples = double(spp) + double(extra_samples[i / 3]);
+        out[i] = float((camera_samples > 0 ? camera_sum[i] / camera_samples : 0.0) + light_sum[i] * inv);
+    }
     return out;
 }
 

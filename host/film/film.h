@@ -2,10 +2,12 @@
 // come from so that passes, devices and resumed renders merge exactly:
 //   image = (camera_sum + light_sum) / spp
 // camera_sum gathers each pixel's own camera subpaths, light_sum the t = 1 splats that light
-// subpaths leave on any pixel. A pass adds one sample of every pixel and one to spp.
+// subpaths leave on any pixel. A pass adds one sample of every pixel and one to spp. Pixels that
+// adaptive sampling gave extra camera samples divide their camera_sum by spp + their extra.
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <vector>
 
 namespace clbdpt {
@@ -19,6 +21,12 @@ struct Film {
     // With strategy images: rgb per pixel for each (s, t), strategy_slot(s, t) major.
     std::vector<double> strategy_sum;
     int strategy_stride = 0;  // max_depth + 3
+    // Adaptive sampling (render/adaptive.h). camera_sq: per pixel, the sum over its camera
+    // samples of r^2 + g^2 + b^2 (kept when RenderOptions::track_variance is set), from which
+    // the pixel's sample variance follows. extra_samples: per pixel, camera samples beyond spp,
+    // added to camera_sum (empty: none); the light image keeps spp samples per pixel.
+    std::vector<double> camera_sq;
+    std::vector<uint32_t> extra_samples;
 
     Film() = default;
     Film(int w, int h) : width(w), height(h), camera_sum(size_t(w) * h * 3), light_sum(size_t(w) * h * 3) {}

@@ -15,6 +15,8 @@ void add_to_film(Film& film, const RenderedItems& items) {
         dst[0] += c[0];
         dst[1] += c[1];
         dst[2] += c[2];
+        if (!film.camera_sq.empty())
+            film.camera_sq[size_t(pixel)] += double(c[0]) * c[0] + double(c[1]) * c[1] + double(c[2]) * c[2];
     }
     for (const SplatRecord& s : items.splats) {
         double* light = &film.light_sum[size_t(s.pixel) * 3];

@@ -42,6 +42,7 @@ Film render_image(const std::vector<UnitWorker*>& workers, int width, int height
     const int first_pass = schedule.resume ? schedule.resume->spp : 0;
     const int planned = timed ? 0 : options.spp;
     Film film = schedule.resume ? *schedule.resume : Film(width, height);
+    if (options.track_variance && film.camera_sq.empty()) film.camera_sq.assign(size_t(width) * height, 0.0);
     const WorkUnits units(width * height, first_pass);
     const auto start = Clock::now();
     UnitQueue queue(units, &film, options.spp - first_pass, options.time_budget, start, int(workers.size()));

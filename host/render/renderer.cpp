@@ -137,6 +137,8 @@ RenderParams Renderer::batch_params(const PassSpec& pass, int first_item, int it
     params.sample_index = pass.sample_index;
     params.seed = pass.seed;
     params.pixel_stride = pass.pixel_stride;
+    params.run_pixel = pass.run_pixel;
+    params.run_length = pass.run_length;
     params.position_sample_index = pass.position_sample_index;
     params.position_seed = pass.position_seed;
     params.zsobol_log2_spp = zsobol_log2_spp_;
@@ -225,7 +227,9 @@ void Renderer::collect(RenderedItems& out, const PassSpec& pass, int first_item,
     const int offset = first_item - out.first_item;
     for (int i = 0; i < item_count; ++i) {
         const int pixel =
-            render_item_pixel(first_item + i, scene_.camera.width, scene_.camera.height, pass.pixel_stride);
+            pass.run_length > 0
+                ? pass.run_pixel + (first_item + i) % pass.run_length
+                : render_item_pixel(first_item + i, scene_.camera.width, scene_.camera.height, pass.pixel_stride);
         float* dst = &out.camera[size_t(offset + i) * 3];
         if (!sample_is_finite(i)) {
             drop_sample(out, i, pixel, pass);

@@ -51,6 +51,9 @@ struct RenderOptions {
     // Benchmarks only: this renderer waits (factor - 1) times each launch's duration after it,
     // as a device `factor` times slower would take, leaving its cores to the others (> 1: on).
     double debug_slowdown = 1;
+    // Keep each pixel's sum of squared sample values (Film::camera_sq), which adaptive
+    // sampling plans from (render/adaptive.h).
+    bool track_variance = false;
     // Called now and then from the rendering thread: passes done, passes planned (0 if
     // time-bound), seconds so far.
     std::function<void(int, int, double)> progress;
@@ -113,6 +116,11 @@ struct PassSpec {
     uint32_t position_sample_index = 0;
     uint32_t position_seed = 0;
     int pixel_stride = 1;
+    // run_length > 0: the items are many samples of the pixels run_pixel .. run_pixel +
+    // run_length - 1 instead: item i is pixel run_pixel + i % run_length at sample (and
+    // position sample) index + i / run_length (adaptive sampling, render/adaptive.h).
+    int run_pixel = 0;
+    int run_length = 0;
 };
 
 class Renderer {

@@ -1,0 +1,91 @@
+// Adaptive sampling's plan (render/adaptive.h), without OpenCL: which pixels get extra samples,
+// that a pixel's plan does not depend on its own samples (what keeps its value unbiased), and the
+// cap on the extra samples.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "render/adaptive.h"
+
+namespace clbdpt {
+namespace {
+
+// A film of spp samples per pixel whose pixel p has sample variance variance(x, y) (summed
+// over channels: every sample is (s, 0, 0), half of them m + d and half m - d, so the mean is m
+// and the variance d^2 n / (n - 1)).
+template <class F>
+Film film_with_variance(int width, int height, int spp, F variance) {
+    Film film(width, height);
+    film.spp = spp;
+    film.camera_sq.assign(size_t(width) * height, 0.0);
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x) {
+            const size_t p = size_t(y) * width + x;
+            const double m = 0.5, v = variance(x, y), d = std::sqrt(v * (spp - 1) / spp);
+            film.camera_sum[p * 3] = m * spp;
+            film.camera_sq[p] = spp * (m * m + d * d);
+        }
+    return film;
+}
+
+// An edge: column 20 of a 40 x 30 film is 1000 times noisier than the rest. The pixels beside it
+// (columns 19 and 21) have two noisy neighbours each, above and below on the edge, and so do the
+// edge's own pixels: those three columns get extra samples (the edge's rows 1 .. 28 at least;
+// its end rows have one noisy neighbour in the column). Uniform noise elsewhere gets none.
+TEST(AdaptivePlan, RefinesEdgesNotUniformNoise) {
+    const int w = 40, h = 30;
+    const Film film = film_with_variance(w, h, 16, [](int x, int) { return x == 20 ? 1000.0 : 1.0; });
+    const AdaptivePlan plan = plan_adaptive_samples(film);
+    for (int y = 1; y < h - 1; ++y)
+        for (int x = 0; x < w; ++x) {
+            const int tier = plan.tier[size_t(y) * w + x];
+            if (x >= 19 && x <= 21) EXPECT_GT(tier, 0) << x << ", " << y;
+            else EXPECT_EQ(tier, 0) << x << ", " << y;
+        }
+    uint64_t extra = 0;
+    for (uint8_t t : plan.tier) extra += 16u * ((1u << t) - 1);
+    EXPECT_EQ(plan.extra_samples, extra);
+
+    const AdaptivePlan uniform = plan_adaptive_samples(film_with_variance(w, h, 16, [](int, int) { return 3.0; }));
+    EXPECT_EQ(uniform.extra_samples, 0u);
+    EXPECT_EQ(uniform.pixels_refined, 0u);
+}
+
+// Changing one pixel's own samples, however much, changes its neighbours' plans but never its
+// own: its extra samples are decided before and apart from its samples, so their mean stays
+// unbiased. (The image-wide mean u_mean moves with it, by at most 1/pixels of the change; the
+// pixel here is placed so that its own tier stays away from a threshold.)
+TEST(AdaptivePlan, PixelsPlanDoesNotDependOnItsOwnSamples) {
+    const int w = 24, h = 24;
+    auto base = [](int x, int y) { return x == 12 ? 200.0 : 1.0 + 0.1 * ((x * 7 + y * 3) % 5); };
+    const AdaptivePlan reference = plan_adaptive_samples(film_with_variance(w, h, 32, base));
+    for (int px : {3, 11, 12}) {
+        const int py = 9;
+        for (double own : {0.0, 1e4}) {
+            const AdaptivePlan changed = plan_adaptive_samples(
+                film_with_variance(w, h, 32, [&](int x, int y) { return x == px && y == py ? own : base(x, y); }));
+            EXPECT_EQ(changed.tier[size_t(py) * w + px], reference.tier[size_t(py) * w + px])
+                << "pixel (" << px << ", " << py << ") with own variance " << own;
+        }
+    }
+}
+
+// The extra samples never exceed max_extra_share of the render's: a film whose noise rises
+// steeply across it gets fewer tiers under a cap set at 3/4 of what it would take uncapped,
+// and some still; max_tier 0 gives none.
+TEST(AdaptivePlan, ExtraSamplesStayWithinTheirShare) {
+    const int w = 64, h = 16, spp = 8;
+    const Film film = film_with_variance(w, h, spp, [](int x, int) { return std::pow(10.0, x / 6.0); });
+    const AdaptivePlan uncapped = plan_adaptive_samples(film, 4, 1e9);
+    ASSERT_GT(uncapped.extra_samples, 0u);
+    const double share = 0.75 * double(uncapped.extra_samples) / (double(spp) * w * h);
+    const AdaptivePlan capped = plan_adaptive_samples(film, 4, share);
+    EXPECT_GT(capped.extra_samples, 0u);
+    EXPECT_LE(double(capped.extra_samples), share * spp * w * h);
+    const AdaptivePlan none = plan_adaptive_samples(film, 0, 1.0);
+    EXPECT_EQ(none.extra_samples, 0u);
+    for (uint8_t t : none.tier) EXPECT_EQ(t, 0);
+}
+
+}  // namespace
+}  // namespace clbdpt
