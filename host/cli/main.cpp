@@ -173,9 +173,10 @@ void write_strategy_images(const std::string& dir, const Film& film, int max_dep
 void check_film_fits_in_memory(int width, int height, int strategy_depth) {
     const double pixels = double(width) * double(height);
     // camera and light sums, plus per-strategy sums with --strategy-images, 3 doubles each,
-    // and the float image written at the end.
+    // and the float image written at the end; and adaptive sampling's per-pixel sum of squares
+    // (a double), plan (a byte) and extra sample count (4 bytes).
     const double strategies = strategy_depth > 0 ? double(strategy_depth + 2) * (strategy_depth + 3) : 0.0;
-    const double bytes = pixels * 3.0 * (8.0 * (2.0 + strategies) + 4.0);
+    const double bytes = pixels * (3.0 * (8.0 * (2.0 + strategies) + 4.0) + 13.0);
     const double physical = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGE_SIZE));
     if (physical > 0 && bytes > 0.8 * physical) {
         char buf[200];
@@ -497,7 +498,8 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
     if (adaptive && interrupted_by == 0) {
         const auto adaptive_start = Clock::now();
         adaptive_plan = plan_adaptive_samples(film);
-        render_adaptive_samples(*renderer_list.front(), adaptive_plan, film, &st);
+        render_adaptive_samples(*renderer_list.front(), adaptive_plan, film, &st,
+                                [] { return interrupt_signal() != 0; });
         adaptive_seconds = seconds_since(adaptive_start);
         st.seconds += adaptive_seconds;
         // The renderers' profiles (--profile) now hold the extra samples' launches too.

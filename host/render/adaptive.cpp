@@ -82,7 +82,8 @@ AdaptivePlan plan_adaptive_samples(const Film& film, int max_tier, double max_ex
     return plan;
 }
 
-void render_adaptive_samples(Renderer& renderer, const AdaptivePlan& plan, Film& film, RenderStats* stats) {
+void render_adaptive_samples(Renderer& renderer, const AdaptivePlan& plan, Film& film, RenderStats* stats,
+                             const std::function<bool()>& stop) {
     const int w = film.width, h = film.height;
     const size_t pixels = size_t(w) * h;
     if (plan.extra_samples == 0) return;
@@ -105,6 +106,7 @@ void render_adaptive_samples(Renderer& renderer, const AdaptivePlan& plan, Film&
             const int run_length = int(end - p);
             const int64_t chunk = std::max<int64_t>(1, kMaxItemsPerCall / run_length);
             for (int64_t done = 0; done < samples; done += chunk) {
+                if (stop && stop()) return;
                 const int64_t count = std::min(chunk, samples - done);
                 PassSpec pass;
                 pass.sample_index = pass.position_sample_index = first_sample + uint32_t(done);

@@ -23,6 +23,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "film/film.h"
@@ -46,7 +47,11 @@ struct AdaptivePlan {
 AdaptivePlan plan_adaptive_samples(const Film& film, int max_tier = 4, double max_extra_share = 1.0);
 
 // Renders the plan's extra samples with `renderer` (whose options give the seed) and adds them
-// to the film's camera sums and extra_samples; stats gain their samples and rays.
-void render_adaptive_samples(Renderer& renderer, const AdaptivePlan& plan, Film& film, RenderStats* stats);
+// to the film's camera sums and extra_samples; stats gain their samples and rays. `stop`, polled
+// between launches, ends it early (Ctrl-C): the samples added so far stay, each pixel's count
+// with them, and since when it stops does not depend on any pixel's samples the image stays
+// unbiased.
+void render_adaptive_samples(Renderer& renderer, const AdaptivePlan& plan, Film& film, RenderStats* stats,
+                             const std::function<bool()>& stop = {});
 
 }  // namespace clbdpt
