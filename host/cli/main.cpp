@@ -698,7 +698,9 @@ int main(int argc, char** argv) {
     render->add_option("-o,--output", args.output,
                        "Output image; format by extension: .exr (linear float), .png/.jpg/.tif (tonemapped sRGB). "
                        "Default: <scene name>.png");
-    render->add_option("--spp", args.spp, "Samples per pixel (default: the scene's render.spp)");
+    render->add_option("--spp", args.spp,
+                       "Samples per pixel (default: the scene's render.spp); adaptive sampling gives the noisiest "
+                       "pixels more (--adaptive)");
     render->add_option("--time", args.time_budget, "Render whole passes until this many seconds are spent");
     render->add_option("--max-depth", args.max_depth, "Maximum scattering vertices per path (default: scene's)");
     render->add_option("--seed", args.seed, "Random seed (default: the scene's render.seed)");
