@@ -52,15 +52,13 @@ __kernel void render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, __global float
     uint rays_traced = 0;
     SceneData scene = SCENE_DATA_FROM_KERNEL_ARGS(&rays_traced);
 
-    int item = params.first_pixel + gid, pixel;
-    uint sample_index = params.sample_index, position_sample_index = params.position_sample_index;
-    if (params.run_length > 0) {
-        pixel = params.run_pixel + item % params.run_length;
-        sample_index += (uint)(item / params.run_length);
-        position_sample_index += (uint)(item / params.run_length);
-    } else {
-        pixel = render_item_pixel(item, params.width, params.height, params.pixel_stride);
-    }
+    int item = params.first_pixel + gid;
+    int pixel = launch_item_pixel(item, params.width, params.height, params.pixel_stride, params.run_pixel,
+                                  params.run_length);
+    /* A run's items go through its pixels once per sample. */
+    uint run_sample = params.run_length > 0 ? (uint)(item / params.run_length) : 0u;
+    uint sample_index = params.sample_index + run_sample;
+    uint position_sample_index = params.position_sample_index + run_sample;
     int px = pixel % params.width, py = pixel / params.width;
     /* The whole sample, both subpaths and every connection, draws from the pixel's own sample
      * vector at the draws cl/sample_dimensions.h assigns. */

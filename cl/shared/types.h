@@ -262,6 +262,14 @@ inline clbdpt_int render_item_pixel(clbdpt_int item, clbdpt_int width, clbdpt_in
     return y * width + x;
 }
 
+/* The pixel of work item `item` of a launch: with run_length > 0 (RenderParams) the run's pixel
+ * run_pixel + item % run_length (its sample is item / run_length further on), else the pass's
+ * render_item_pixel. The kernel and the host's collection of its outputs both map items so. */
+inline clbdpt_int launch_item_pixel(clbdpt_int item, clbdpt_int width, clbdpt_int height, clbdpt_int stride,
+                                    clbdpt_int run_pixel, clbdpt_int run_length) {
+    return run_length > 0 ? run_pixel + item % run_length : render_item_pixel(item, width, height, stride);
+}
+
 /* A contribution that lands at another pixel than the work item's own (t = 1 strategies).
  * Each work item owns max_depth + 1 slots; pixel < 0 marks an empty slot. The host adds the
  * records in slot order, so the light image does not depend on the order work items ran. */

@@ -504,11 +504,7 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
         st.seconds += adaptive_seconds;
         // The renderers' profiles (--profile) now hold the extra samples' launches too.
         st.profile = RenderProfile();
-        for (Renderer* r : renderer_list) {
-            st.profile.kernel_seconds += r->stats().profile.kernel_seconds;
-            st.profile.transfer_seconds += r->stats().profile.transfer_seconds;
-            st.profile.accumulate_seconds += r->stats().profile.accumulate_seconds;
-        }
+        for (Renderer* r : renderer_list) st.profile.add(r->stats().profile);
     }
     if (run_pilot) {
         st.add(pilot_stats);

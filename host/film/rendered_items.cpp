@@ -9,7 +9,8 @@ void add_to_film(Film& film, const RenderedItems& items) {
             ++next_dropped;
             continue;
         }
-        const int pixel = render_item_pixel(items.first_item + i, film.width, film.height, items.pixel_stride);
+        const int pixel = launch_item_pixel(items.first_item + i, film.width, film.height, items.pixel_stride,
+                                            items.run_pixel, items.run_length);
         double* dst = &film.camera_sum[size_t(pixel) * 3];
         const float* c = &items.camera[size_t(i) * 3];
         dst[0] += c[0];

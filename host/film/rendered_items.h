@@ -42,6 +42,7 @@ struct RenderedItems {
     int first_item = 0;
     int item_count = 0;
     int pixel_stride = 1;
+    int run_pixel = 0, run_length = 0;  // a run of pixels instead of a pass (PassSpec)
     // Per item: rgb. Items in dropped_items (sorted) are not added.
     std::vector<float> camera;
     std::vector<int> dropped_items;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "film/rendered_items.h"
 #include "util/error.h"
 
 namespace clbdpt {
@@ -113,16 +114,9 @@ void render_adaptive_samples(Renderer& renderer, const AdaptivePlan& plan, Film&
                 pass.seed = pass.position_seed = seed;
                 pass.run_pixel = int(p);
                 pass.run_length = run_length;
-                const RenderedItems items = renderer.render_items(pass, 0, int(count * run_length));
-                size_t next_dropped = 0;
-                for (int i = 0; i < items.item_count; ++i) {
-                    if (next_dropped < items.dropped_items.size() && items.dropped_items[next_dropped] == i) {
-                        ++next_dropped;
-                        continue;
-                    }
-                    const size_t pixel = p + size_t(i % run_length);
-                    for (int c = 0; c < 3; ++c) film.camera_sum[pixel * 3 + c] += items.camera[size_t(i) * 3 + c];
-                }
+                RenderedItems items = renderer.render_items(pass, 0, int(count * run_length));
+                items.splats.clear();  // the light image keeps spp samples per pixel
+                add_to_film(film, items);
                 for (int i = 0; i < run_length; ++i) film.extra_samples[p + size_t(i)] += uint32_t(count);
                 if (stats) stats->add_counts(items.counts);
             }

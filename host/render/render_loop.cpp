@@ -140,9 +140,7 @@ Film render_image(const std::vector<Renderer*>& renderers, const RenderOptions& 
     total.program_from_cache = true;
     for (Renderer* r : renderers) {
         const RenderStats& rs = r->stats();
-        total.profile.kernel_seconds += rs.profile.kernel_seconds;
-        total.profile.transfer_seconds += rs.profile.transfer_seconds;
-        total.profile.accumulate_seconds += rs.profile.accumulate_seconds;
+        total.profile.add(rs.profile);
         total.build_seconds += rs.build_seconds;
         total.program_from_cache = total.program_from_cache && rs.program_from_cache;
     }

@@ -226,10 +226,8 @@ void Renderer::collect(RenderedItems& out, const PassSpec& pass, int first_item,
     // Item i of this launch is item first_item - out.first_item + i of `out`.
     const int offset = first_item - out.first_item;
     for (int i = 0; i < item_count; ++i) {
-        const int pixel =
-            pass.run_length > 0
-                ? pass.run_pixel + (first_item + i) % pass.run_length
-                : render_item_pixel(first_item + i, scene_.camera.width, scene_.camera.height, pass.pixel_stride);
+        const int pixel = launch_item_pixel(first_item + i, scene_.camera.width, scene_.camera.height,
+                                            pass.pixel_stride, pass.run_pixel, pass.run_length);
         float* dst = &out.camera[size_t(offset + i) * 3];
         if (!sample_is_finite(i)) {
             drop_sample(out, i, pixel, pass);
@@ -306,6 +304,8 @@ RenderedItems Renderer::render_items(const PassSpec& pass, int first_item, int i
     out.first_item = first_item;
     out.item_count = item_count;
     out.pixel_stride = pass.pixel_stride;
+    out.run_pixel = pass.run_pixel;
+    out.run_length = pass.run_length;
     out.camera.assign(size_t(item_count) * 3, 0.0f);
     // Light subpaths leave a few splats each (measured: 2-4 at max depth 5 on the bundled
     // scenes); reserving them saves most of the vector's regrowth.

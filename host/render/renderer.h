@@ -66,6 +66,11 @@ struct RenderProfile {
     double kernel_seconds = 0;
     double transfer_seconds = 0;
     double accumulate_seconds = 0;
+    void add(const RenderProfile& other) {
+        kernel_seconds += other.kernel_seconds;
+        transfer_seconds += other.transfer_seconds;
+        accumulate_seconds += other.accumulate_seconds;
+    }
 };
 
 struct RenderStats {
@@ -73,9 +78,7 @@ struct RenderStats {
     double first_pass_seconds = 0; // wall time until the first pass was done
     RenderProfile profile;
     void add(const RenderStats& other) {
-        profile.kernel_seconds += other.profile.kernel_seconds;
-        profile.transfer_seconds += other.profile.transfer_seconds;
-        profile.accumulate_seconds += other.profile.accumulate_seconds;
+        profile.add(other.profile);
         add_counts(ItemCounts{other.samples, other.rays, other.dropped_samples, other.first_dropped});
         build_seconds += other.build_seconds;
     }
