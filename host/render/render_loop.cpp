@@ -75,6 +75,9 @@ Film render_image(const std::vector<UnitWorker*>& workers, int width, int height
     if (schedule.stop_requested && schedule.stop_requested()) queue.stop();
     std::vector<std::thread> threads;
     for (size_t w = 0; w < workers.size(); ++w) threads.emplace_back(worker, w);
+    // Adding to the film has a thread of its own: a fast device (a GPU renders a pass in
+    // milliseconds) would otherwise wait for it after every run.
+    std::thread adder([&queue] { queue.add_results(); });
 
     // This thread reports progress, watches for a stop request and hands out the snapshots.
     auto last_checkpoint = Clock::now();
@@ -105,6 +108,7 @@ Film render_image(const std::vector<UnitWorker*>& workers, int width, int height
         if (finished) break;
     }
     for (std::thread& t : threads) t.join();
+    adder.join();
     const double seconds = seconds_since(start);
     if (failure) std::rethrow_exception(failure);
     if (options.progress) options.progress(first_pass + queue.passes_done(), planned, seconds);

@@ -87,10 +87,20 @@ std::optional<UnitQueue::Grab> UnitQueue::take_over(int worker, Clock::time_poin
     return Grab{best->begin, best->end, true, best->done};
 }
 
+int UnitQueue::ready_backlog() const {
+    int n = 0;
+    for (auto it = finished_.find(added_end_); it != finished_.end(); it = finished_.find(it->second.end)) ++n;
+    return n;
+}
+
 std::optional<UnitQueue::Grab> UnitQueue::take(int worker) {
     std::unique_lock<std::mutex> lock(mutex_);
     for (;;) {
         if (aborted_) return leave();
+        if (ready_backlog() >= kMaxReadyBacklog) {
+            changed_.wait(lock);
+            continue;
+        }
         const Clock::time_point now = Clock::now();
         const double rate = rate_[size_t(worker)];
         auto expected_end = [&](int64_t begin, int64_t end) {
@@ -146,19 +156,19 @@ void UnitQueue::complete(int worker, const Grab& grab, std::vector<RenderedItems
         held_.erase(h);
         share.samples += items;
         finished_[grab.begin] = Finished{grab.end, std::move(results)};
-        changed_.notify_all();
     }
-    add_ready_results();
+    changed_.notify_all();
 }
 
-void UnitQueue::add_ready_results() {
+void UnitQueue::add_results() {
     std::lock_guard<std::mutex> adding(add_mutex_);
     for (;;) {
         Finished f;
         {
-            std::lock_guard<std::mutex> lock(mutex_);
+            std::unique_lock<std::mutex> lock(mutex_);
+            changed_.wait(lock, [&] { return finished_.count(added_end_) > 0 || workers_running_ == 0; });
             auto it = finished_.find(added_end_);
-            if (it == finished_.end()) return;
+            if (it == finished_.end()) return;  // every worker has left: nothing more comes
             f = std::move(it->second);
             finished_.erase(it);
         }

@@ -7,7 +7,9 @@
 //   worker is expected to renders the same run; the first result is added, the other discarded
 //   (and the slower copy is told to stop).
 // - A worker that fails gives its run back; the others render it first.
-// - Results are added to the film strictly in unit order; a run that finishes early waits.
+// - Results are added to the film strictly in unit order, by a thread of their own
+//   (add_results); a run that finishes early waits, and a worker waits while the adding is
+//   kMaxReadyBacklog results behind.
 //
 // Whole passes: a time-bound render hands out passes until its budget is spent, and a stop
 // (an interrupt) finishes the pass it is in; the film always ends on a pass boundary.
@@ -58,7 +60,11 @@ public:
     // only work left is runs that other workers hold and it would not finish sooner.
     std::optional<Grab> take(int worker);
     // The results of a grab (one RenderedItems per pass the run touches), rendered in `seconds`.
+    // They wait for add_ready_results (another thread), so the worker goes on rendering.
     void complete(int worker, const Grab& grab, std::vector<RenderedItems>&& results, double seconds);
+    // The adding thread's loop: adds results to the film in unit order as they come in, and
+    // returns once every worker has left and all that can be added is in.
+    void add_results();
     // `worker` failed on `grab`: true if it leaves the render and the run goes to the others;
     // false if it was the last worker (the render fails).
     bool fail(int worker, const Grab& grab);
@@ -97,7 +103,8 @@ private:
     int64_t grab_size(int worker) const;
     std::optional<Grab> take_over(int worker, Clock::time_point now);
     void extend_end();
-    void add_ready_results();
+    // Results next in unit order that wait to be added (the caller holds mutex_).
+    int ready_backlog() const;
     std::optional<Grab> leave();
     double seconds_since_start() const;
     // How long units [begin, end) take at `rate` items per second.
@@ -130,6 +137,9 @@ private:
 
     // Serialises the adding of results, which runs outside mutex_.
     std::mutex add_mutex_;
+    // A worker waits in take() while this many results wait to be added, so that a device
+    // faster than the adding does not pile up results without bound.
+    static constexpr int kMaxReadyBacklog = 2;
 };
 
 }  // namespace clbdpt
