@@ -3,6 +3,7 @@
 #include "device/opencl.h"
 
 #include "device/embedded_kernels.h"
+#include "device/pinned_host_array.h"
 #include "util/error.h"
 
 #include <gtest/gtest.h>
@@ -375,6 +376,31 @@ TEST(Opencl, ProgramCacheDirFollowsEnvironment) {
     ScopedEnv xdg("XDG_CACHE_HOME", "");
     ScopedEnv home("HOME", "/home/someone");
     EXPECT_EQ(program_cache_dir(), "/home/someone/.cache/clbdpt");
+}
+
+// ---- Pinned host memory --------------------------------------------------------------------------
+
+TEST(Opencl, PinnedHostArrayTakesReadBacksAndMoves) {
+    DeviceContext device(select_device(""));
+    std::vector<cl_int> values(1000);
+    for (size_t i = 0; i < values.size(); ++i) values[i] = cl_int(i * 7 + 1);
+    cl::Buffer buffer(device.context(), CL_MEM_READ_WRITE | CL_MEM_COPY_HOST_PTR, sizeof(cl_int) * values.size(),
+                      values.data());
+    PinnedHostArray<cl_int> host(device.context(), device.queue(), values.size());
+    ASSERT_NE(host.data(), nullptr);
+    EXPECT_EQ(host.size(), values.size());
+    device.queue().enqueueReadBuffer(buffer, CL_TRUE, 0, sizeof(cl_int) * values.size(), host.data());
+    for (size_t i = 0; i < values.size(); ++i) ASSERT_EQ(host[i], values[i]) << i;
+    // Moved, the memory stays mapped and holds the same values; the source is left empty.
+    cl_int* mapped = host.data();
+    PinnedHostArray<cl_int> moved(std::move(host));
+    EXPECT_EQ(moved.data(), mapped);
+    EXPECT_EQ(host.data(), nullptr);
+    EXPECT_EQ(moved[999], values[999]);
+    PinnedHostArray<cl_int> empty(device.context(), device.queue(), 0);
+    EXPECT_EQ(empty.data(), nullptr);
+    empty = std::move(moved);  // the empty one takes it over; nothing is unmapped twice
+    EXPECT_EQ(empty[0], values[0]);
 }
 
 }  // namespace

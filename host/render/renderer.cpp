@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <iterator>
+#include <optional>
 #include <thread>
 
 #include "util/error.h"
@@ -71,24 +73,29 @@ Renderer::Renderer(DeviceContext& device, const DeviceScene& scene, const Render
         splat_slots_ = options.integrator == Integrator::Pt ? 0 : options.max_depth + 1;
         const size_t bytes_per_item = sizeof(cl_float4) + sizeof(SplatRecord) * size_t(splat_slots_ + strategy_slots_);
         const int pixels = scene.camera.width * scene.camera.height;
-        size_t limit = std::min<size_t>(kMaxBatchBytes, device.entry().max_alloc) / bytes_per_item;
+        const size_t slot_bytes = kMaxBatchBytes / std::size(slots_);
+        size_t limit = std::min<size_t>(slot_bytes, device.entry().max_alloc) / bytes_per_item;
         batch_items_ = int(std::min<size_t>({size_t(pixels), size_t(kMaxBatchItems), limit}));
         if (options.batch_items > 0) batch_items_ = std::min(batch_items_, options.batch_items);
         batch_items_ = std::max(batch_items_, 1);
         launch_items_ = batch_items_;
-        camera_out_ = cl::Buffer(ctx, CL_MEM_WRITE_ONLY, sizeof(cl_float4) * batch_items_);
-        splats_ = cl::Buffer(ctx, CL_MEM_WRITE_ONLY,
-                             sizeof(SplatRecord) * std::max<size_t>(1, size_t(batch_items_) * splat_slots_));
-        if (strategy_slots_ > 0) {
-            strategy_out_ = cl::Buffer(ctx, CL_MEM_WRITE_ONLY, sizeof(SplatRecord) * size_t(batch_items_) * strategy_slots_);
-            strategy_host_.resize(size_t(batch_items_) * strategy_slots_);
-            kernel_.setArg(kParamsArg + 3, strategy_out_);
+        for (LaunchSlot& slot : slots_) {
+            slot.camera_out = cl::Buffer(ctx, CL_MEM_WRITE_ONLY, sizeof(cl_float4) * batch_items_);
+            slot.splats = cl::Buffer(ctx, CL_MEM_WRITE_ONLY,
+                                     sizeof(SplatRecord) * std::max<size_t>(1, size_t(batch_items_) * splat_slots_));
+            if (strategy_slots_ > 0) {
+                slot.strategy_out =
+                    cl::Buffer(ctx, CL_MEM_WRITE_ONLY, sizeof(SplatRecord) * size_t(batch_items_) * strategy_slots_);
+                slot.strategy_host =
+                    PinnedHostArray<SplatRecord>(ctx, device.queue(), size_t(batch_items_) * strategy_slots_);
+            }
+            slot.camera_host = PinnedHostArray<cl_float4>(ctx, device.queue(), size_t(batch_items_));
+            slot.splats_host = PinnedHostArray<SplatRecord>(ctx, device.queue(), size_t(batch_items_) * splat_slots_);
         }
-        camera_host_.resize(batch_items_);
-        splats_host_.resize(size_t(batch_items_) * splat_slots_);
         scene_buffers_->set_args(kernel_);
-        kernel_.setArg(kParamsArg + 1, camera_out_);
-        kernel_.setArg(kParamsArg + 2, splats_);
+        kernel_.setArg(kParamsArg + 1, slots_[0].camera_out);
+        kernel_.setArg(kParamsArg + 2, slots_[0].splats);
+        if (strategy_slots_ > 0) kernel_.setArg(kParamsArg + 3, slots_[0].strategy_out);
         if (local_size_ > 0) {
             // PoCL compiles the work-group function of a kernel at its first launch: do that
             // now, with an empty launch, so it counts as build time and not as render time.
@@ -149,61 +156,74 @@ RenderParams Renderer::batch_params(const PassSpec& pass, int first_item, int it
     return params;
 }
 
-void Renderer::launch_and_read_back(const RenderParams& params, int item_count) {
+void Renderer::enqueue_launch(LaunchSlot& slot, const RenderParams& params, int item_count) {
     cl::CommandQueue& queue = device_.queue();
-    cl::Event kernel_done, camera_read, splats_read, strategies_read;
     try {
         kernel_.setArg(kParamsArg, params);
+        kernel_.setArg(kParamsArg + 1, slot.camera_out);
+        kernel_.setArg(kParamsArg + 2, slot.splats);
+        if (strategy_slots_ > 0) kernel_.setArg(kParamsArg + 3, slot.strategy_out);
+        slot.enqueued = std::chrono::steady_clock::now();
         if (local_size_ > 0) {
             const size_t local = size_t(local_size_);
             const size_t global = (size_t(item_count) + local - 1) / local * local;
             queue.enqueueNDRangeKernel(kernel_, cl::NullRange, cl::NDRange(global), cl::NDRange(local), nullptr,
-                                       &kernel_done);
+                                       &slot.kernel_done);
         } else {
             queue.enqueueNDRangeKernel(kernel_, cl::NullRange, cl::NDRange(size_t(item_count)), cl::NullRange, nullptr,
-                                       &kernel_done);
+                                       &slot.kernel_done);
         }
-        queue.enqueueReadBuffer(camera_out_, CL_FALSE, 0, sizeof(cl_float4) * item_count, camera_host_.data(), nullptr,
-                                &camera_read);
+        queue.enqueueReadBuffer(slot.camera_out, CL_FALSE, 0, sizeof(cl_float4) * item_count, slot.camera_host.data(),
+                                nullptr, &slot.camera_read);
         if (splat_slots_ > 0)
-            queue.enqueueReadBuffer(splats_, CL_FALSE, 0, sizeof(SplatRecord) * size_t(item_count) * splat_slots_,
-                                    splats_host_.data(), nullptr, &splats_read);
+            queue.enqueueReadBuffer(slot.splats, CL_FALSE, 0, sizeof(SplatRecord) * size_t(item_count) * splat_slots_,
+                                    slot.splats_host.data(), nullptr, &slot.splats_read);
         if (strategy_slots_ > 0)
-            queue.enqueueReadBuffer(strategy_out_, CL_FALSE, 0,
-                                    sizeof(SplatRecord) * size_t(item_count) * strategy_slots_, strategy_host_.data(),
-                                    nullptr, &strategies_read);
-        queue.finish();
-        if (device_.profiling()) {
-            auto seconds = [](const cl::Event& e) {
-                return 1e-9 * double(e.getProfilingInfo<CL_PROFILING_COMMAND_END>() -
-                                     e.getProfilingInfo<CL_PROFILING_COMMAND_START>());
-            };
-            stats_.profile.kernel_seconds += seconds(kernel_done);
-            stats_.profile.transfer_seconds += seconds(camera_read);
-            if (splat_slots_ > 0) stats_.profile.transfer_seconds += seconds(splats_read);
-            if (strategy_slots_ > 0) stats_.profile.transfer_seconds += seconds(strategies_read);
-        }
+            queue.enqueueReadBuffer(slot.strategy_out, CL_FALSE, 0,
+                                    sizeof(SplatRecord) * size_t(item_count) * strategy_slots_,
+                                    slot.strategy_host.data(), nullptr, &slot.strategies_read);
+        queue.flush();
     } catch (const cl::Error& e) {
         throw Error(std::string("OpenCL: ") + e.what() + ": " + cl_error_name(e.err()) + " while rendering on " +
                     device_.entry().name);
     }
 }
 
-bool Renderer::sample_is_finite(int item) const {
-    // The kernel names the first strategy that gave a non-finite value in w
-    // (cl/kernels/render.cl); a sum that overflowed is caught here as well.
-    const cl_float4& c = camera_host_[size_t(item)];
-    if (!(c.s[3] >= 0 && std::isfinite(c.s[0]) && std::isfinite(c.s[1]) && std::isfinite(c.s[2]))) return false;
-    const SplatRecord* splats = splats_host_.data() + size_t(item) * splat_slots_;
-    for (int k = 0; k < splat_slots_; ++k)
-        if (splats[k].pixel >= 0 &&
-            !(std::isfinite(splats[k].r) && std::isfinite(splats[k].g) && std::isfinite(splats[k].b)))
-            return false;
-    return true;
+void Renderer::finish_launch(RenderedItems& out, const PassSpec& pass, const InFlight& launch) {
+    LaunchSlot& slot = slots_[launch.slot];
+    try {
+        // The queue is in order: the last read being in means the kernel and the other reads are.
+        (strategy_slots_ > 0 ? slot.strategies_read : splat_slots_ > 0 ? slot.splats_read : slot.camera_read).wait();
+        if (device_.profiling()) {
+            auto seconds = [](const cl::Event& e) {
+                return 1e-9 * double(e.getProfilingInfo<CL_PROFILING_COMMAND_END>() -
+                                     e.getProfilingInfo<CL_PROFILING_COMMAND_START>());
+            };
+            stats_.profile.kernel_seconds += seconds(slot.kernel_done);
+            stats_.profile.transfer_seconds += seconds(slot.camera_read);
+            if (splat_slots_ > 0) stats_.profile.transfer_seconds += seconds(slot.splats_read);
+            if (strategy_slots_ > 0) stats_.profile.transfer_seconds += seconds(slot.strategies_read);
+        }
+    } catch (const cl::Error& e) {
+        throw Error(std::string("OpenCL: ") + e.what() + ": " + cl_error_name(e.err()) + " while rendering on " +
+                    device_.entry().name);
+    }
+    // The device worked on this launch from when it was enqueued or the one before it was done,
+    // whichever was later.
+    const auto done = std::chrono::steady_clock::now();
+    const double launch_seconds = std::chrono::duration<double>(done - std::max(slot.enqueued, last_done_)).count();
+    last_done_ = done;
+    limit_launch_size(launch_seconds, launch.item_count);
+    collect(out, pass, slot, launch.first_item, launch.item_count);
+    stats_.profile.accumulate_seconds +=
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - done).count();
+    if (options_.debug_slowdown > 1)
+        std::this_thread::sleep_for(std::chrono::duration<double>((options_.debug_slowdown - 1) * launch_seconds));
 }
 
-void Renderer::drop_sample(RenderedItems& out, int item, int pixel, const PassSpec& pass) const {
-    const cl_float4& c = camera_host_[size_t(item)];
+void Renderer::drop_sample(RenderedItems& out, const LaunchSlot& slot, int item, int pixel,
+                           const PassSpec& pass) const {
+    const cl_float4& c = slot.camera_host[size_t(item)];
     DroppedSample d;
     d.x = pixel % scene_.camera.width;
     d.y = pixel / scene_.camera.width;
@@ -222,29 +242,42 @@ void Renderer::drop_sample(RenderedItems& out, int item, int pixel, const PassSp
     if (out.counts.first_dropped.size() < ItemCounts::kFirstDropped) out.counts.first_dropped.push_back(d);
 }
 
-void Renderer::collect(RenderedItems& out, const PassSpec& pass, int first_item, int item_count) const {
-    // Item i of this launch is item first_item - out.first_item + i of `out`.
+void Renderer::collect(RenderedItems& out, const PassSpec& pass, const LaunchSlot& slot, int first_item,
+                       int item_count) const {
+    // Item i of this launch is item first_item - out.first_item + i of `out`. One pass over the
+    // outputs, pointers stepping along: on a GPU this loop is what the device waits for.
     const int offset = first_item - out.first_item;
-    for (int i = 0; i < item_count; ++i) {
-        const int pixel = launch_item_pixel(first_item + i, scene_.camera.width, scene_.camera.height,
-                                            pass.pixel_stride, pass.run_pixel, pass.run_length);
-        float* dst = &out.camera[size_t(offset + i) * 3];
-        if (!sample_is_finite(i)) {
-            drop_sample(out, i, pixel, pass);
+    const cl_float4* camera = slot.camera_host.data();
+    const SplatRecord* splats = slot.splats_host.data();
+    float* dst = &out.camera[size_t(offset) * 3];
+    uint64_t rays = 0;
+    for (int i = 0; i < item_count; ++i, dst += 3, splats += splat_slots_) {
+        const float* c = camera[i].s;
+        // A non-finite value is a bug: the kernel names the first strategy that gave one in w
+        // (cl/kernels/render.cl), and a sum that overflowed is caught here. The item's splats go
+        // in as they are checked, and come out again if one is not finite.
+        const size_t splats_before = out.splats.size();
+        bool finite = c[3] >= 0 && std::isfinite(c[0]) && std::isfinite(c[1]) && std::isfinite(c[2]);
+        for (int k = 0; k < splat_slots_ && finite; ++k) {
+            const SplatRecord& r = splats[k];
+            if (r.pixel < 0) continue;
+            finite = std::isfinite(r.r) && std::isfinite(r.g) && std::isfinite(r.b);
+            out.splats.push_back(r);
+        }
+        if (!finite) {
+            out.splats.resize(splats_before);
+            const int pixel = launch_item_pixel(first_item + i, scene_.camera.width, scene_.camera.height,
+                                                pass.pixel_stride, pass.run_pixel, pass.run_length);
+            drop_sample(out, slot, i, pixel, pass);
             out.dropped_items.push_back(offset + i);
             continue;
         }
-        const cl_float4& c = camera_host_[size_t(i)];
-        dst[0] = c.s[0];
-        dst[1] = c.s[1];
-        dst[2] = c.s[2];
-        out.counts.rays += uint64_t(c.s[3]);
-        const SplatRecord* splats = splats_host_.data() + size_t(i) * splat_slots_;
-        for (int k = 0; k < splat_slots_; ++k) {
-            const SplatRecord& r = splats[k];
-            if (r.pixel >= 0) out.splats.push_back(r);
-        }
+        dst[0] = c[0];
+        dst[1] = c[1];
+        dst[2] = c[2];
+        rays += uint32_t(c[3]);  // a whole number of rays, far below 2^24
     }
+    out.counts.rays += rays;
     if (strategy_slots_ > 0) {
         auto dropped = std::lower_bound(out.dropped_items.begin(), out.dropped_items.end(), offset);
         for (int i = 0; i < item_count; ++i) {
@@ -252,29 +285,12 @@ void Renderer::collect(RenderedItems& out, const PassSpec& pass, int first_item,
                 ++dropped;
                 continue;
             }
-            const SplatRecord* records = strategy_host_.data() + size_t(i) * strategy_slots_;
+            const SplatRecord* records = slot.strategy_host.data() + size_t(i) * strategy_slots_;
             for (int slot = 0; slot < strategy_slots_; ++slot)
                 if (records[slot].pixel >= 0) out.strategy_splats.push_back({slot, records[slot]});
         }
     }
     out.counts.samples += uint64_t(item_count);
-}
-
-void Renderer::run_batch(RenderedItems& out, const PassSpec& pass, int first_item, int item_count) {
-    if (options_.debug_fail_after_launches >= 0 && launches_ >= options_.debug_fail_after_launches)
-        throw Error("OpenCL: launch failed (injected by --debug-fail-device) while rendering on " +
-                    device_.entry().name);
-    ++launches_;
-    const auto launch_start = std::chrono::steady_clock::now();
-    launch_and_read_back(batch_params(pass, first_item, item_count), item_count);
-    const auto accumulate_start = std::chrono::steady_clock::now();
-    const double launch_seconds = std::chrono::duration<double>(accumulate_start - launch_start).count();
-    limit_launch_size(launch_seconds, item_count);
-    collect(out, pass, first_item, item_count);
-    stats_.profile.accumulate_seconds +=
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - accumulate_start).count();
-    if (options_.debug_slowdown > 1)
-        std::this_thread::sleep_for(std::chrono::duration<double>((options_.debug_slowdown - 1) * launch_seconds));
 }
 
 void Renderer::limit_launch_size(double seconds, int item_count) {
@@ -312,10 +328,31 @@ RenderedItems Renderer::render_items(const PassSpec& pass, int first_item, int i
     if (splat_slots_ > 0) out.splats.reserve(size_t(item_count) * std::min(splat_slots_, 4));
     out.strategy_slots = strategy_slots_;
     out.strategy_stride = strategy_slots_ > 0 ? options_.max_depth + 3 : 0;
-    for (int first = first_item, count, end = first_item + item_count; first < end; first += count) {
-        if (cancelled && cancelled()) break;
-        count = std::min(launch_items_, end - first);
-        run_batch(out, pass, first, count);
+    // Launch k + 1 is enqueued before launch k is collected, so the device does not wait for
+    // the host; the items are still collected in order.
+    std::optional<InFlight> in_flight;
+    int next_slot = 0;
+    try {
+        for (int first = first_item, count, end = first_item + item_count; first < end; first += count) {
+            if (cancelled && cancelled()) break;
+            count = std::min(launch_items_, end - first);
+            if (options_.debug_fail_after_launches >= 0 && launches_ >= options_.debug_fail_after_launches)
+                throw Error("OpenCL: launch failed (injected by --debug-fail-device) while rendering on " +
+                            device_.entry().name);
+            ++launches_;
+            enqueue_launch(slots_[next_slot], batch_params(pass, first, count), count);
+            if (in_flight) finish_launch(out, pass, *in_flight);
+            in_flight = InFlight{next_slot, first, count};
+            next_slot = 1 - next_slot;
+        }
+        if (in_flight) finish_launch(out, pass, *in_flight);
+    } catch (...) {
+        // A launch may still be writing into a slot's host copies: let it end first.
+        try {
+            device_.queue().finish();
+        } catch (const cl::Error&) {
+        }
+        throw;
     }
     return out;
 }

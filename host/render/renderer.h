@@ -1,9 +1,11 @@
 // Drives the render kernel: uploads the device scene, runs one launch per batch of pixels and
-// sample index, and adds the camera contributions and t = 1 splat records into double-precision
-// sums on the host in a fixed order, so the same scene, seed and spp on the same device give
-// the same image bit for bit however the work is batched.
+// sample index (two in flight: the device renders one while the host collects the other), and
+// adds the camera contributions and t = 1 splat records into double-precision sums on the host
+// in a fixed order, so the same scene, seed and spp on the same device give the same image bit
+// for bit however the work is batched.
 #pragma once
 
+#include <chrono>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -11,6 +13,7 @@
 #include <vector>
 
 #include "device/opencl.h"
+#include "device/pinned_host_array.h"
 #include "film/film.h"
 #include "film/rendered_items.h"
 #include "render/device_scene.h"
@@ -156,18 +159,34 @@ public:
     const DeviceScene& scene() const { return scene_; }
 
 private:
-    // One launch of the render kernel over items [first_item, first_item + item_count) of a
-    // pass, in four steps: its parameters, the launch and the read-back of its outputs, a
-    // smaller size for the following launches if this one took too long, and the collection
-    // of the outputs into `out`.
-    void run_batch(RenderedItems& out, const PassSpec& pass, int first_item, int item_count);
+    // One launch's outputs: its device buffers, their host copies, and the events that say
+    // they are in. There are two, so that the device renders launch k + 1 while the host
+    // collects launch k.
+    struct LaunchSlot {
+        cl::Buffer camera_out, splats, strategy_out;
+        PinnedHostArray<cl_float4> camera_host;
+        PinnedHostArray<SplatRecord> splats_host, strategy_host;
+        cl::Event kernel_done, camera_read, splats_read, strategies_read;
+        std::chrono::steady_clock::time_point enqueued;
+    };
+    // A launch in flight: its slot and its items.
+    struct InFlight {
+        int slot;
+        int first_item, item_count;
+    };
+
     RenderParams batch_params(const PassSpec& pass, int first_item, int item_count) const;
-    void launch_and_read_back(const RenderParams& params, int item_count);
+    // Enqueues one launch of the render kernel over a batch's items and the read-back of its
+    // outputs into `slot`, without waiting for them.
+    void enqueue_launch(LaunchSlot& slot, const RenderParams& params, int item_count);
+    // Waits for a launch's outputs, shrinks the following launches if it took too long, and
+    // collects its outputs into `out`.
+    void finish_launch(RenderedItems& out, const PassSpec& pass, const InFlight& launch);
     void limit_launch_size(double seconds, int item_count);
-    void collect(RenderedItems& out, const PassSpec& pass, int first_item, int item_count) const;
-    bool sample_is_finite(int item) const;
+    void collect(RenderedItems& out, const PassSpec& pass, const LaunchSlot& slot, int first_item,
+                 int item_count) const;
     // Counts a sample with a non-finite value and leaves it out, or throws (drop_non_finite off).
-    void drop_sample(RenderedItems& out, int item, int pixel, const PassSpec& pass) const;
+    void drop_sample(RenderedItems& out, const LaunchSlot& slot, int item, int pixel, const PassSpec& pass) const;
 
     DeviceContext& device_;
     const DeviceScene& scene_;
@@ -175,16 +194,16 @@ private:
     RenderStats stats_;
     cl::Kernel kernel_;
     std::shared_ptr<SceneBuffers> scene_buffers_;
-    cl::Buffer camera_out_, splats_, strategy_out_;
-    int batch_items_ = 0;   // work items the output buffers hold
+    LaunchSlot slots_[2];
+    // When the last launch's outputs were in (the device is busy from then on while launches
+    // wait in its queue).
+    std::chrono::steady_clock::time_point last_done_;
+    int batch_items_ = 0;   // work items each slot's output buffers hold
     int launch_items_ = 0;  // work items per launch now (at most batch_items_)
     int launches_ = 0;
     int local_size_ = 0;  // 0 = the driver's choice
     int zsobol_log2_spp_ = 0, zsobol_base4_digits_ = 0;
     int splat_slots_ = 0;
-    std::vector<cl_float4> camera_host_;
-    std::vector<SplatRecord> splats_host_;
-    std::vector<SplatRecord> strategy_host_;
     int strategy_slots_ = 0;
 };
 
