@@ -156,6 +156,11 @@ RenderParams Renderer::batch_params(const PassSpec& pass, int first_item, int it
     return params;
 }
 
+Error Renderer::rendering_failure(const cl::Error& e) const {
+    return Error(std::string("OpenCL: ") + e.what() + ": " + cl_error_name(e.err()) + " while rendering on " +
+                 device_.entry().name);
+}
+
 void Renderer::enqueue_launch(LaunchSlot& slot, const RenderParams& params, int item_count) {
     cl::CommandQueue& queue = device_.queue();
     try {
@@ -184,8 +189,7 @@ void Renderer::enqueue_launch(LaunchSlot& slot, const RenderParams& params, int 
                                     slot.strategy_host.data(), nullptr, &slot.strategies_read);
         queue.flush();
     } catch (const cl::Error& e) {
-        throw Error(std::string("OpenCL: ") + e.what() + ": " + cl_error_name(e.err()) + " while rendering on " +
-                    device_.entry().name);
+        throw rendering_failure(e);
     }
 }
 
@@ -205,8 +209,7 @@ void Renderer::finish_launch(RenderedItems& out, const PassSpec& pass, const InF
             if (strategy_slots_ > 0) stats_.profile.transfer_seconds += seconds(slot.strategies_read);
         }
     } catch (const cl::Error& e) {
-        throw Error(std::string("OpenCL: ") + e.what() + ": " + cl_error_name(e.err()) + " while rendering on " +
-                    device_.entry().name);
+        throw rendering_failure(e);
     }
     // The device worked on this launch from when it was enqueued or the one before it was done,
     // whichever was later.

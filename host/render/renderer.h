@@ -19,6 +19,7 @@
 #include "render/device_scene.h"
 #include "render/features.h"
 #include "render/scene_buffers.h"
+#include "util/error.h"
 
 namespace clbdpt {
 
@@ -176,6 +177,8 @@ private:
     };
 
     RenderParams batch_params(const PassSpec& pass, int first_item, int item_count) const;
+    // The error a failed OpenCL call while rendering is reported as.
+    Error rendering_failure(const cl::Error& e) const;
     // Enqueues one launch of the render kernel over a batch's items and the read-back of its
     // outputs into `slot`, without waiting for them.
     void enqueue_launch(LaunchSlot& slot, const RenderParams& params, int item_count);
