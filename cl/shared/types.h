@@ -245,6 +245,7 @@ inline clbdpt_int render_item_count(clbdpt_int width, clbdpt_int height, clbdpt_
  * same pixels. */
 inline clbdpt_int render_item_pixel(clbdpt_int item, clbdpt_int width, clbdpt_int height,
                                     clbdpt_int stride) {
+    if (stride == 1) return item; /* a whole pass: its items are its pixels, in order */
     clbdpt_int columns = (width + stride - 1) / stride;
     clbdpt_int x = (item % columns) * stride, y = (item / columns) * stride;
     if (stride > 1) {

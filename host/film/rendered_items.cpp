@@ -4,17 +4,13 @@ namespace clbdpt {
 
 void add_to_film(Film& film, const RenderedItems& items) {
     size_t next_dropped = 0;
-    // A whole pass's items are its pixels in order (render_item_pixel with stride 1): no
-    // divisions per item, which a GPU's pace makes felt.
-    const bool item_is_pixel = items.pixel_stride == 1 && items.run_length <= 0;
     for (int i = 0; i < items.item_count; ++i) {
         if (next_dropped < items.dropped_items.size() && items.dropped_items[next_dropped] == i) {
             ++next_dropped;
             continue;
         }
-        const int pixel = item_is_pixel ? items.first_item + i
-                                        : launch_item_pixel(items.first_item + i, film.width, film.height,
-                                                            items.pixel_stride, items.run_pixel, items.run_length);
+        const int pixel = launch_item_pixel(items.first_item + i, film.width, film.height, items.pixel_stride,
+                                            items.run_pixel, items.run_length);
         double* dst = &film.camera_sum[size_t(pixel) * 3];
         const float* c = &items.camera[size_t(i) * 3];
         dst[0] += c[0];

@@ -161,7 +161,6 @@ void UnitQueue::complete(int worker, const Grab& grab, std::vector<RenderedItems
 }
 
 void UnitQueue::add_results() {
-    std::lock_guard<std::mutex> adding(add_mutex_);
     for (;;) {
         Finished f;
         {
@@ -172,6 +171,7 @@ void UnitQueue::add_results() {
             f = std::move(it->second);
             finished_.erase(it);
         }
+        // Outside mutex_, so workers go on meanwhile: this thread alone touches the film.
         ItemCounts counts;
         for (const RenderedItems& r : f.results) {
             add_to_film(*film_, r);

@@ -135,8 +135,6 @@ private:
     ItemCounts counts_;
     double first_pass_seconds_ = 0;
 
-    // Serialises the adding of results, which runs outside mutex_.
-    std::mutex add_mutex_;
     // A worker waits in take() while this many results wait to be added, so that a device
     // faster than the adding does not pile up results without bound.
     static constexpr int kMaxReadyBacklog = 2;
