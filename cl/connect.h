@@ -36,8 +36,18 @@ __attribute__((always_inline)) inline float3 connection_visibility(const SceneDa
 #endif
 }
 
+/* The number of light samples strategy (s, t) takes: one, but for s = 1 with NEE_EVERY_LIGHT one
+ * of each light group (cl/lights.h), each connected by its own call of connect_bdpt. */
+inline int connection_light_samples(const SceneData* scene, int s, int t) {
+#ifdef NEE_EVERY_LIGHT
+    if (s == 1 && t >= 2) return nee_group_count(scene);
+#endif
+    return 1;
+}
+
+/* nee_group: for s = 1 with NEE_EVERY_LIGHT, which light group to sample (else unused). */
 inline float3 connect_bdpt(const SceneData* scene, const StrategyMix* mix, Rng* rng, const PathVertex* light_path,
-                           const PathVertex* camera_path, int s, int t, float2* raster, float* weight) {
+                           const PathVertex* camera_path, int s, int t, int nee_group, float2* raster, float* weight) {
     float3 L = (float3)(0.0f);
     PathVertex sampled;
     float to_qs = 1.0f, to_pt = 1.0f;
@@ -72,7 +82,11 @@ inline float3 connect_bdpt(const SceneData* scene, const StrategyMix* mix, Rng* 
         float2 u = rng_next2(rng);
         if (!vertex_is_connectible(scene, pt) || scene->info->light_count == 0) return L;
         float select_pdf;
+#ifdef NEE_EVERY_LIGHT
+        int light = nee_group_light(scene, nee_group, pt->p, u_light, &select_pdf);
+#else
         int light = sample_light_for_point(scene, pt->p, u_light, &select_pdf);
+#endif
         LightSample ls;
         if (light >= 0 && light_sample_li(scene, light, pt->p, u, &ls)) {
             sampled = vertex_at(VERTEX_LIGHT, ls.p, ls.n, ls.p_error);

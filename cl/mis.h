@@ -55,12 +55,12 @@ inline float mis_weight(const SceneData* scene, const StrategyMix* mix, const Pa
     const PathVertex* emitter = s == 0 ? &pt : (s == 1 ? &qs : &light_path[0]);
     int light_is_area = emitter->type == VERTEX_SURFACE || vertex_light_kind(scene, emitter) == LIGHT_AREA;
 
-    /* A light sample (s = 1, t >= 2) picks its light with a distribution of its own where
-     * NEE_CONE_AWARE (cl/lights.h), every other strategy with select_pdf. The densities below
+    /* A light sample (s = 1, t >= 2) takes its light with a probability of its own where
+     * NEE_OWN_SELECTION (cl/lights.h), every other strategy with select_pdf. The densities below
      * use select_pdf throughout; the s = 1 term is then scaled by the ratio of the two, and if
      * s = 1 is the strategy weighed, every other term is divided by it. */
     float s1_scale = 1.0f;
-#if defined(NEE_CONE_AWARE) && INTEGRATOR != INTEGRATOR_LT /* a light tracer has no s = 1, t >= 2 */
+#if defined(NEE_OWN_SELECTION) && INTEGRATOR != INTEGRATOR_LT /* a light tracer has no s = 1, t >= 2 */
     if (s + t >= 3) {
         /* the vertex a light sample would be taken from: the path's second from the light */
         const PathVertex* sample_from = s == 0 ? pt_minus : (s == 1 ? &pt : &light_path[1]);

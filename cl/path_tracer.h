@@ -55,37 +55,52 @@ inline float3 path_tracer_emitter_hit(const SceneData* scene, const PathVertex* 
     if (is_black(L) || t < 3 || prev->delta) return L;
     float pdf_light = vertex_pdf_light_origin(scene, v, prev);
     float ratio = mis_ratio(pdf_light, 0, v->pdf_fwd, 0);
-#ifdef NEE_CONE_AWARE
+#ifdef NEE_OWN_SELECTION
     ratio *= light_sample_selection_ratio(scene, v->light, prev->p); /* pdf_light has select_pdf */
 #endif
     return L * (1.0f / (1.0f + ratio));
 }
 
-/* s = 1 at the path's vertex v: a light point sampled from v (draws u_light, u) and joined to
- * it, weighted against s = 0 (the same path found by sampling v's BSDF toward the light point;
- * p_0 / p_1 = its area density over the light's origin density; weight 1 for a delta light). */
-inline float3 path_tracer_light_sample(const SceneData* scene, float u_light, float2 u, const PathVertex* prev,
-                                       const PathVertex* v) {
-    float3 L = (float3)(0.0f);
-    if (!vertex_is_connectible(scene, v) || scene->info->light_count == 0) return L;
-    float select_pdf;
-    int light = sample_light_for_point(scene, v->p, u_light, &select_pdf);
+/* s = 1 at the path's vertex v: a light point sampled from v on `light` (taken with
+ * probability select_pdf; -1: none) with draw u and joined to it, weighted against s = 0 (the
+ * same path found by sampling v's BSDF toward the light point; p_0 / p_1 = its area density
+ * over the light's origin density; weight 1 for a delta light). */
+inline float3 path_tracer_light_sample(const SceneData* scene, int light, float select_pdf, float2 u,
+                                       const PathVertex* prev, const PathVertex* v) {
     LightSample ls;
-    if (light < 0 || !light_sample_li(scene, light, v->p, u, &ls)) return L;
+    if (light < 0 || !light_sample_li(scene, light, v->p, u, &ls)) return (float3)(0.0f);
     PathVertex sampled = vertex_at(VERTEX_LIGHT, ls.p, ls.n, ls.p_error);
     sampled.beta = ls.li / (ls.pdf_w * select_pdf);
     sampled.light = light;
     sampled.pdf_fwd = vertex_pdf_light_origin(scene, &sampled, v);
-    L = v->beta * vertex_f(scene, v, &sampled, TRANSPORT_RADIANCE) * sampled.beta;
+    float3 L = v->beta * vertex_f(scene, v, &sampled, TRANSPORT_RADIANCE) * sampled.beta;
     if (vertex_on_surface(v)) L *= fabs(dot(ls.wi, v->ns));
     if (is_black(L) || !vertices_visible(scene, v, &sampled)) return (float3)(0.0f);
     if (vertex_is_delta_light(scene, &sampled)) return L;
     float pdf_bsdf = vertex_pdf(scene, v, prev, &sampled);
     float ratio = mis_ratio(pdf_bsdf, 0, sampled.pdf_fwd, 0);
-#ifdef NEE_CONE_AWARE
+#ifdef NEE_OWN_SELECTION
     ratio /= light_sample_selection_ratio(scene, light, v->p); /* sampled.pdf_fwd has select_pdf */
 #endif
     return L * (1.0f / (1.0f + ratio));
+}
+
+/* The s = 1 strategy samples at the path's vertex v (draws u_light, u): one light sample, or
+ * with NEE_EVERY_LIGHT one of each light group (cl/lights.h), each added on its own. */
+inline void path_tracer_light_samples(const SceneData* scene, float u_light, float2 u, const PathVertex* prev,
+                                      const PathVertex* v, int t, PathTracerSum* sum) {
+    if (!vertex_is_connectible(scene, v) || scene->info->light_count == 0) return;
+    float select_pdf;
+#ifdef NEE_EVERY_LIGHT
+    int groups = nee_group_count(scene);
+    for (int g = 0; g < groups; ++g) {
+        int light = nee_group_light(scene, g, v->p, u_light, &select_pdf);
+        path_tracer_add(sum, path_tracer_light_sample(scene, light, select_pdf, u, prev, v), 1, t);
+    }
+#else
+    int light = sample_light_for_point(scene, v->p, u_light, &select_pdf);
+    path_tracer_add(sum, path_tracer_light_sample(scene, light, select_pdf, u, prev, v), 1, t);
+#endif
 }
 
 /* One path tracer sample through raster position `raster`: the camera subpath of cl/walk.h
@@ -130,7 +145,7 @@ inline void path_tracer_sample(const SceneData* scene, Rng* rng, float2 raster, 
         uint light_draw = sample_draw_light_connection(t), bounce_draw = sample_draw_camera_bounce(i - 1);
         float4 ux, uy;
         rng_draws4(rng, (uint4)(light_draw, light_draw + 1u, bounce_draw, bounce_draw + 1u), &ux, &uy);
-        path_tracer_add(sum, path_tracer_light_sample(scene, ux.s0, (float2)(ux.s1, uy.s1), &prev, &v), 1, t);
+        path_tracer_light_samples(scene, ux.s0, (float2)(ux.s1, uy.s1), &prev, &v, t, sum);
 
         Bsdf b = vertex_bsdf(scene, &v);
         BsdfSample bs;

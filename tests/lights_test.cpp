@@ -589,13 +589,22 @@ TEST(Lights, SelectionFollowsSelectPdf) {
     expect_fit(obs, expected, "light selection");
 }
 
-// A light sample from a point (NEE_CONE_AWARE: this scene has a spot among 5 lights) picks
-// lights in proportion to select_pdf, but a spot by 4 pi I over the total power where its cone
-// holds the point and never where it does not (chi-square on the index frequencies); it
-// reports that probability, and light_sample_selection_ratio is it over select_pdf.
+// A light sample from a point (NEE_CONE_AWARE: this scene has a spot among 5 lights, and a
+// medium, which rules out NEE_EVERY_LIGHT; nothing is in the medium) picks lights in proportion
+// to select_pdf, but a spot by 4 pi I over the total power where its cone holds the point and
+// never where it does not (chi-square on the index frequencies); it reports that probability,
+// and light_sample_selection_ratio is it over select_pdf.
 TEST(Lights, LightSampleSkipsSpotsThatCannotReachThePoint) {
-    const TestScene& scene = map_scene();
+    static const TestScene scene = [] {
+        Scene s = light_scene(true);
+        MediumDesc fog;
+        fog.name = "fog";
+        fog.sigma_a = {0.1f, 0.1f, 0.1f};
+        s.media.push_back(fog);
+        return TestScene(s, 32, 32);
+    }();
     ASSERT_NE(std::find(scene.defines.begin(), scene.defines.end(), "NEE_CONE_AWARE"), scene.defines.end());
+    ASSERT_EQ(std::find(scene.defines.begin(), scene.defines.end(), "NEE_EVERY_LIGHT"), scene.defines.end());
     const std::vector<Light>& lights = scene.ds.lights;
     double total_power = 0;
     for (float p : scene.ds.light_power) total_power += p;
@@ -632,6 +641,67 @@ TEST(Lights, LightSampleSkipsSpotsThatCannotReachThePoint) {
         for (size_t i = 0; i < lights.size(); ++i) expected[i] = double(n) * weight[i] / total;
         if (!in_cone) expected.erase(expected.begin() + kSpot), obs.erase(obs.begin() + kSpot);
         expect_fit(obs, expected, in_cone ? "light sample inside the cone" : "light sample outside the cone");
+    }
+}
+
+// Two area lights of different power, a point and a spot light: 3 light groups, so a light
+// sample is taken of each (NEE_EVERY_LIGHT). Group 0 picks an area light by select_pdf among
+// the area lights (chi-square on the index frequencies), group 1 is the point light and group 2
+// the spot, each with probability 1, the spot only inside its cone; each reports its
+// probability, and light_sample_selection_ratio is it over select_pdf.
+TEST(Lights, LightSamplesTakeEveryLightGroup) {
+    static const TestScene scene = [] {
+        Scene s = light_scene(false);
+        int dim = add_material(s, make_material(MATERIAL_DIFFUSE, {0, 0, 0}, {}, {1, 1, 2}));
+        add_triangle(s, {-1.6, 1.8, 0.4}, {-0.8, 1.8, 0.5}, {-1.2, 1.9, 1.2}, dim);
+        s.lights.resize(2);  // point, spot
+        return TestScene(s, 32, 32);
+    }();
+    const std::vector<std::string>& flags = scene.defines;
+    ASSERT_NE(std::find(flags.begin(), flags.end(), "NEE_EVERY_LIGHT"), flags.end());
+    ASSERT_EQ(std::find(flags.begin(), flags.end(), "NEE_CONE_AWARE"), flags.end());
+    const std::vector<Light>& lights = scene.ds.lights;
+    ASSERT_EQ(lights.size(), 4u);
+    ASSERT_EQ(scene.ds.info.area_light_count, 2);
+    ASSERT_EQ(lights[2].kind, LIGHT_POINT);
+    ASSERT_EQ(lights[3].kind, LIGHT_SPOT);
+    const double area_total = double(lights[0].select_pdf) + lights[1].select_pdf;
+    const D3 spot_axis = normalize(kSpotTarget - kSpotPos);
+    const D3 inside = kSpotPos + 2.5 * spot_axis;
+    const D3 outside = kSpotPos + 2.5 * normalize(D3(1, -0.2, 0.1));
+    for (D3 x : {inside, outside}) {
+        const bool in_cone = x.x == inside.x;
+        const size_t n = 1 << 14;
+        cl::Kernel k = scene.kernel("kernels/lights_test.cl", "light_groups_at_point_test");
+        k.setArg(SceneBuffers::kSceneArgCount, cl_uint(79));
+        k.setArg(SceneBuffers::kSceneArgCount + 1, cl_float4{{float(x.x), float(x.y), float(x.z), 0.0f}});
+        cl::Buffer out = output_buffer<cl_float4>(4 * n);
+        k.setArg(SceneBuffers::kSceneArgCount + 2, out);
+        launch(k, n);
+        std::vector<cl_float4> r = download<cl_float4>(out, 4 * n);
+        std::vector<double> obs(2, 0.0);
+        for (size_t j = 0; j < n; ++j) {
+            const cl_float4* g = &r[4 * j];
+            ASSERT_EQ(g[0].s[3], 3.0f) << "light groups";
+            const int area = int(g[0].s[0]);
+            ASSERT_TRUE(area == 0 || area == 1) << area;
+            const double p = lights[size_t(area)].select_pdf / area_total;
+            ASSERT_LE(rel_diff(g[0].s[1], p), 1e-5);
+            ASSERT_LE(rel_diff(g[0].s[2], p / lights[size_t(area)].select_pdf), 1e-5);
+            obs[size_t(area)] += 1;
+            ASSERT_EQ(int(g[1].s[0]), 2);
+            ASSERT_EQ(g[1].s[1], 1.0f);
+            ASSERT_LE(rel_diff(g[1].s[2], 1.0 / lights[2].select_pdf), 1e-5);
+            if (in_cone) {
+                ASSERT_EQ(int(g[2].s[0]), 3);
+                ASSERT_EQ(g[2].s[1], 1.0f);
+                ASSERT_LE(rel_diff(g[2].s[2], 1.0 / lights[3].select_pdf), 1e-5);
+            } else {
+                ASSERT_EQ(int(g[2].s[0]), -1) << "the spot cannot reach the point";
+            }
+        }
+        expect_fit(obs, {double(n) * lights[0].select_pdf / area_total, double(n) * lights[1].select_pdf / area_total},
+                   "area light picks");
     }
 }
 

@@ -165,8 +165,14 @@ struct Reference {
         env_integral /= double(w) * h;
         bool spot = false;
         for (const Light& l : ds.lights) spot |= l.kind == LIGHT_SPOT;
-        cone_aware = spot && ds.lights.size() <= kConeAwareMaxLights;
+        int area_lights = 0;
+        for (const Light& l : ds.lights) area_lights += l.kind == LIGHT_AREA;
+        int groups = int(ds.lights.size()) - area_lights + (area_lights > 0 ? 1 : 0);
+        every_light = ds.media.empty() && groups >= 2 && groups <= kEveryLightMaxGroups;
+        cone_aware = !every_light && spot && ds.lights.size() <= kConeAwareMaxLights;
         for (float p : ds.light_power) total_power += p;
+        for (const Light& l : ds.lights)
+            if (l.kind == LIGHT_AREA) area_select_total += l.select_pdf;
     }
 
     // A light sample from x (s = 1) picks light l with probability w_l(x) / sum_k w_k(x) in a
@@ -181,7 +187,19 @@ struct Reference {
         bool inside = dot(normalize(x - d3(L.position)), d3(L.direction)) >= 1 - double(L.one_minus_cos_total);
         return inside ? 4 * kPi * luminance({L.emission.s[0], L.emission.s[1], L.emission.s[2]}) / total_power : 0.0;
     }
+    // With a few light groups (NEE_EVERY_LIGHT) the light samples from x take every group: one
+    // area light among them by select_pdf, and every other light with probability 1 (a spot
+    // only inside its cone).
+    bool every_light = false;
+    double area_select_total = 0;
+    double every_light_probability(int l, D3 x) const {
+        const Light& L = ds.lights[size_t(l)];
+        if (L.kind == LIGHT_AREA) return L.select_pdf / area_select_total;
+        if (L.kind != LIGHT_SPOT) return 1;
+        return dot(normalize(x - d3(L.position)), d3(L.direction)) >= 1 - double(L.one_minus_cos_total) ? 1 : 0;
+    }
     double light_sample_ratio(int l, D3 x) const {
+        if (every_light) return every_light_probability(l, x) / ds.lights[size_t(l)].select_pdf;
         if (!cone_aware) return 1;
         double total = 0;
         for (size_t k = 0; k < ds.lights.size(); ++k) total += light_weight(int(k), x);
@@ -705,6 +723,10 @@ void check_integrator(Integrator integrator, bool thin, uint64_t seed, Mix mix =
     const TestScene& ts = media ? media_scene() : scene();
     Camera cam = make_camera(camera_desc(thin), kWidth, kHeight);
     Reference ref(ts.ds, cam);
+    // Light samples take a light of each of the vacuum scene's 5 light groups (NEE_EVERY_LIGHT);
+    // in media, one light, skipping the spot where its cone does not reach (NEE_CONE_AWARE).
+    EXPECT_EQ(ref.every_light, !media);
+    EXPECT_EQ(ref.cone_aware, media);
     if (media) {
         ref.media = true;
         ref.sigma_t = d3(ts.ds.media[0].sigma_t);

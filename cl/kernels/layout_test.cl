@@ -30,8 +30,8 @@
         F(Camera, lens_area)                                                                      \
     S(SceneInfo) F(SceneInfo, world_center) F(SceneInfo, light_count)                             \
         F(SceneInfo, environment_light) F(SceneInfo, env_width) F(SceneInfo, env_height)          \
-        F(SceneInfo, triangle_count) F(SceneInfo, node_count) F(SceneInfo, camera_medium)                  \
-        F(SceneInfo, pad1)                                                                        \
+        F(SceneInfo, triangle_count) F(SceneInfo, node_count) F(SceneInfo, camera_medium)         \
+        F(SceneInfo, area_light_count)                                                            \
     S(RenderParams) F(RenderParams, width) F(RenderParams, height) F(RenderParams, first_pixel)   \
         F(RenderParams, pixel_count) F(RenderParams, sample_index) F(RenderParams, seed)          \
         F(RenderParams, light_subpaths)                                \

@@ -89,3 +89,23 @@ __kernel void light_select_at_point_test(SCENE_KERNEL_ARGS, uint seed, float4 x,
     float ratio = i >= 0 ? light_sample_selection_ratio(&scene, i, x.xyz) : 0.0f;
     out[gid] = (float4)((float)i, select_pdf, ratio, 0.0f);
 }
+
+#ifdef NEE_EVERY_LIGHT
+/* The light samples of every light group from point x on counter-based u_light: out[4 i + g] =
+ * (light of group g, its reported probability, light_sample_selection_ratio of that light at
+ * x, group count); groups beyond the scene's are left alone. */
+__kernel void light_groups_at_point_test(SCENE_KERNEL_ARGS, uint seed, float4 x, __global float4* out) {
+    int gid = get_global_id(0);
+    uint rays = 0;
+    SceneData scene = SCENE_DATA_FROM_KERNEL_ARGS(&rays);
+    Rng rng = rng_init((uint)gid, 0u, seed);
+    float u_light = rng_next(&rng);
+    int groups = nee_group_count(&scene);
+    for (int g = 0; g < min(groups, 4); ++g) {
+        float pick_pdf = 0.0f;
+        int i = nee_group_light(&scene, g, x.xyz, u_light, &pick_pdf);
+        float ratio = i >= 0 ? light_sample_selection_ratio(&scene, i, x.xyz) : 0.0f;
+        out[4 * gid + g] = (float4)((float)i, pick_pdf, ratio, (float)groups);
+    }
+}
+#endif

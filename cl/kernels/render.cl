@@ -126,45 +126,56 @@ __kernel void render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, __global float
             if (depth < 0 || depth > MAX_DEPTH) continue;
             if (strategy_uses_light_subpath(s, t) && s > n_light) continue;
             if (!strategy_enabled(&mix, s, t, light_is_area)) continue;
-            float2 splat_raster;
-            float weight;
-            float3 unweighted = connect_bdpt(&scene, &mix, &rng, light_path, camera_path, s, t, &splat_raster, &weight);
-            if (is_black(unweighted)) continue;
-            /* Divided by the strategy's samples per pixel sample (its light subpath may be
-             * traced for only a fraction of the samples). */
-            float3 c = unweighted * (weight / strategy_sample_count(&mix, s, t));
+            /* s = 1 may take several light samples (connection_light_samples, cl/connect.h). */
+            int light_samples = connection_light_samples(&scene, s, t);
+            for (int g = 0; g < light_samples; ++g) {
+                float2 splat_raster;
+                float weight;
+                float3 unweighted = connect_bdpt(&scene, &mix, &rng, light_path, camera_path, s, t, g,
+                                                 &splat_raster, &weight);
+                if (is_black(unweighted)) continue;
+                /* Divided by the strategy's samples per pixel sample (its light subpath may be
+                 * traced for only a fraction of the samples). */
+                float3 c = unweighted * (weight / strategy_sample_count(&mix, s, t));
 #ifdef DEBUG_NAN_PIXEL
-            if (pixel == DEBUG_NAN_PIXEL && sample_index == 0) c = (float3)(NAN);
+                if (pixel == DEBUG_NAN_PIXEL && sample_index == 0) c = (float3)(NAN);
 #endif
-            /* NaN or Inf in any channel makes the difference NaN (isfinite on each channel
-             * cost PoCL 15% of a path tracer's samples per second). */
-            float probe = c.x + c.y + c.z;
-            if (probe - probe != 0.0f && bad_strategy < 0) bad_strategy = s * STRATEGY_STRIDE + t;
-            int target = pixel;
-            if (t == 1) {
-                int sx = min((int)splat_raster.x, params.width - 1);
-                int sy = min((int)splat_raster.y, params.height - 1);
-                target = sy * params.width + sx;
-                __global SplatRecord* rec = &my_splats[s - 1];
-                rec->r = c.x;
-                rec->g = c.y;
-                rec->b = c.z;
-                rec->pixel = target;
-            } else {
-                L += c;
-            }
+                /* NaN or Inf in any channel makes the difference NaN (isfinite on each channel
+                 * cost PoCL 15% of a path tracer's samples per second). */
+                float probe = c.x + c.y + c.z;
+                if (probe - probe != 0.0f && bad_strategy < 0) bad_strategy = s * STRATEGY_STRIDE + t;
+                int target = pixel;
+                if (t == 1) {
+                    int sx = min((int)splat_raster.x, params.width - 1);
+                    int sy = min((int)splat_raster.y, params.height - 1);
+                    target = sy * params.width + sx;
+                    __global SplatRecord* rec = &my_splats[s - 1];
+                    rec->r = c.x;
+                    rec->g = c.y;
+                    rec->b = c.z;
+                    rec->pixel = target;
+                } else {
+                    L += c;
+                }
 #ifdef STRATEGY_IMAGES
-            __global SplatRecord* srec = &my_strategies[s * STRATEGY_STRIDE + t];
+                __global SplatRecord* srec = &my_strategies[s * STRATEGY_STRIDE + t];
 #ifdef STRATEGY_IMAGES_UNWEIGHTED
-            float3 shown = unweighted;
+                float3 shown = unweighted;
 #else
-            float3 shown = c;
+                float3 shown = c;
 #endif
-            srec->r = shown.x;
-            srec->g = shown.y;
-            srec->b = shown.z;
-            srec->pixel = target;
+                if (srec->pixel == target) { /* another light group's sample of this (s, t) */
+                    srec->r += shown.x;
+                    srec->g += shown.y;
+                    srec->b += shown.z;
+                } else {
+                    srec->r = shown.x;
+                    srec->g = shown.y;
+                    srec->b = shown.z;
+                    srec->pixel = target;
+                }
 #endif
+            }
         }
     }
     camera_out[gid] = (float4)(L.x, L.y, L.z, bad_strategy < 0 ? (float)rays_traced : -1.0f - (float)bad_strategy);

@@ -192,7 +192,7 @@ typedef struct {
     clbdpt_int triangle_count;
     clbdpt_int node_count;
     clbdpt_int camera_medium; /* the medium around the camera (1 + index, 0 = vacuum) */
-    clbdpt_int pad1;
+    clbdpt_int area_light_count; /* lights[0 .. area_light_count - 1] are the area lights */
 } SceneInfo;
 
 /* ---- Per-launch parameters and outputs ------------------------------------------------- */

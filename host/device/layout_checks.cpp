@@ -118,7 +118,7 @@ CLBDPT_CHECK_FIELD(SceneInfo, env_height, 28);
 CLBDPT_CHECK_FIELD(SceneInfo, triangle_count, 32);
 CLBDPT_CHECK_FIELD(SceneInfo, node_count, 36);
 CLBDPT_CHECK_FIELD(SceneInfo, camera_medium, 40);
-CLBDPT_CHECK_FIELD(SceneInfo, pad1, 44);
+CLBDPT_CHECK_FIELD(SceneInfo, area_light_count, 44);
 
 CLBDPT_CHECK_STRUCT(RenderParams, 64, 4);
 CLBDPT_CHECK_FIELD(RenderParams, width, 0);

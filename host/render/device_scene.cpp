@@ -215,6 +215,8 @@ DeviceScene build_device_scene(const Scene& scene, int width, int height) {
         ds.lights.push_back(l);
         powers.push_back(luminance(vec3_of(m.ke)) * emission_scale(m) * l.area * kPi);
     }
+    // The area lights come first (NEE_EVERY_LIGHT samples them as one group, cl/lights.h).
+    ds.info.area_light_count = int(ds.lights.size());
     for (const LightDesc& desc : scene.lights) {
         Light l{};
         float power = 0;

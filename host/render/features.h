@@ -24,6 +24,14 @@ SamplerKind parse_sampler(const std::string& name);  // throws Error
 // cones in view (NEE_CONE_AWARE, cl/lights.h); each such sample loops over every light.
 constexpr size_t kConeAwareMaxLights = 8;
 
+// Scenes without media with 2 to this many light groups (the area lights together, every other
+// light alone) take a light sample of each group at every vertex (NEE_EVERY_LIGHT,
+// cl/lights.h): one shadow ray per group.
+constexpr int kEveryLightMaxGroups = 8;
+
+// The light groups of NEE_EVERY_LIGHT: 1 for all the area lights, 1 for each other light.
+int light_group_count(const DeviceScene& scene);
+
 // all_features: every HAS_* flag on (the unspecialised build, for benchmarks and tests).
 std::vector<std::string> kernel_defines(const DeviceScene& scene, Integrator integrator, int max_depth,
                                         bool all_features = false, SamplerKind sampler = SamplerKind::Independent);
