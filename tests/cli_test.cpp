@@ -361,6 +361,41 @@ TEST_F(CliTest, AutoChoosesTheStrategyMixByPilot) {
     EXPECT_FALSE(fs::exists(out("w.exr")));
 }
 
+// point-spot has two light groups (a point and a spot light) and no media: by default its light
+// samples take every group (NEE_EVERY_LIGHT); --light-samples one takes one light per sample, and
+// every takes every group in a scene with one group too (the Cornell box: its two light
+// triangles are one group). The stats and the kernel flags say which; an unknown value is one
+// error line.
+TEST_F(CliTest, LightSamplesOfEveryGroupOrOne) {
+    auto render_with = [&](const std::string& scene, const std::string& flags, const std::string& name) {
+        CommandResult r = run("render " + std::string(CLBDPT_SCENES_DIR) + "/" + scene + "/" + scene +
+                              ".json --width 16 --height 16 --spp 2 --integrator pt " + flags + " -o " +
+                              out(name + ".exr") + " --stats " + out(name + ".json"));
+        EXPECT_EQ(r.status, 0) << r.output;
+        std::ifstream in(out(name + ".json"));
+        return nlohmann::json::parse(in);
+    };
+    auto has_flag = [](const nlohmann::json& j, const std::string& flag) {
+        for (const nlohmann::json& d : j["kernel_defines"])
+            if (d == flag) return true;
+        return false;
+    };
+    nlohmann::json automatic = render_with("point-spot", "", "auto");
+    EXPECT_EQ(automatic["light_samples"], "every");
+    EXPECT_TRUE(has_flag(automatic, "NEE_EVERY_LIGHT"));
+    nlohmann::json one = render_with("point-spot", "--light-samples one", "one");
+    EXPECT_EQ(one["light_samples"], "one");
+    EXPECT_FALSE(has_flag(one, "NEE_EVERY_LIGHT"));
+    EXPECT_TRUE(has_flag(one, "NEE_CONE_AWARE"));
+    EXPECT_EQ(render_with("cornell-box", "", "box")["light_samples"], "one");
+    EXPECT_EQ(render_with("cornell-box", "--light-samples every", "box_every")["light_samples"], "every");
+    CommandResult wrong = run("render " + std::string(CLBDPT_SCENES_DIR) +
+                              "/point-spot/point-spot.json --spp 1 --light-samples all -o " + out("w.exr"));
+    EXPECT_NE(wrong.status, 0);
+    EXPECT_NE(wrong.output.find("--light-samples"), std::string::npos) << wrong.output;
+    EXPECT_FALSE(fs::exists(out("w.exr")));
+}
+
 TEST_F(CliTest, DevicesListsAtLeastOne) {
     CommandResult r = run("devices");
     ASSERT_EQ(r.status, 0) << r.output;
@@ -372,7 +407,8 @@ TEST_F(CliTest, HelpDocumentsTheOptions) {
     CommandResult r = run("render --help");
     EXPECT_EQ(r.status, 0);
     for (const char* opt : {"--output", "--spp", "--time", "--max-depth", "--seed", "--device", "--width", "--height",
-                            "--stats", "--integrator", "--aov", "--light-subpaths", "--connections", "--sampler"})
+                            "--stats", "--integrator", "--aov", "--light-subpaths", "--connections", "--light-samples",
+                            "--sampler"})
         EXPECT_NE(r.output.find(opt), std::string::npos) << opt;
 }
 

@@ -300,6 +300,46 @@ INSTANTIATE_TEST_SUITE_P(Cones, SpotConeTest, ::testing::Values(0.009f, 90.0f),
                              return info.param < 1 ? std::string("narrow_0_018_degrees") : std::string("hemisphere");
                          });
 
+// ---- Light samples of every light group -------------------------------------------------------
+
+// The room lit by two ceiling lights of one material and different sizes (one light group, whose
+// sample picks one of its four triangles by power), a point light by a wall and a spot aimed at
+// the floor with the edge of its cone in view: 3 light groups, so light samples take one of each
+// (NEE_EVERY_LIGHT, cl/lights.h). The light tracer takes no light samples, so pt (light samples
+// weighted against emitter hits) and bdpt (weighted against light subpaths too) must agree with
+// it: a pick probability that is not the one sampled with biases pt's and bdpt's images (a
+// uniform 1/4 for the four triangles put pt up to 12 standard errors off). The MIS weights' own
+// use of it cannot bias them while they sum to 1; the brute-force MIS test checks their values.
+TEST(HardCases, LightSamplesOfEveryGroupAgreeWithTheLightTracer) {
+    SceneBuilder b;
+    RoomMaterials m = room_materials(b);
+    room_walls(b, m);
+    ceiling_light(b, {-0.4f, 1.999f, 0.3f}, 0.5f, m.light);
+    ceiling_light(b, {0.5f, 1.999f, -0.2f}, 0.25f, m.light);
+    LightDesc point;
+    point.kind = LightDesc::Kind::Point;
+    point.position = {0.7f, 1.2f, 0.6f};
+    point.color = {1.5f, 1.5f, 1.5f};
+    LightDesc spot;
+    spot.kind = LightDesc::Kind::Spot;
+    spot.position = {-0.3f, 1.9f, -0.5f};
+    spot.target = {-0.2f, 0.0f, 0.4f};
+    spot.cone_angle = 30;
+    spot.cone_delta = 5;
+    spot.color = {4, 3, 2};
+    b.scene.lights = {point, spot};
+    room_camera(b);
+    ASSERT_TRUE(kernel_has_define(b.scene, "NEE_EVERY_LIGHT"));
+    DeviceScene scene = build_device_scene(b.scene, kFilm, kFilm);
+    RegionStats lt = render(scene, Integrator::Lt, kDepth, 191, 64, "every light lt");
+    RegionStats pt = render(scene, Integrator::Pt, kDepth, 192, 64, "every light pt");
+    RegionStats bdpt = render(scene, Integrator::Bdpt, kDepth, 193, 64, "every light bdpt");
+    ASSERT_GT(lt.image_mean, 0.01);
+    expect_agree(pt, lt, kSigmas, "every light pt vs lt");
+    expect_agree(bdpt, lt, kSigmas, "every light bdpt vs lt");
+    expect_agree(pt, bdpt, kSigmas, "every light pt vs bdpt");
+}
+
 // ---- Grazing geometry ------------------------------------------------------------------------
 
 // A diffuse floor (albedo rho) lit by a directional light travelling 0.1 degrees below the

@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <cstdio>
@@ -48,6 +49,7 @@ struct RenderArgs {
     std::string integrator = "auto";
     float light_subpaths = -1;  // < 0: not given
     std::string connections;    // "on", "off" or empty
+    std::string light_samples = "auto";
     std::string sampler;  // empty: sobol
     std::string adaptive = "on";
     std::string aov;
@@ -227,7 +229,8 @@ std::string choose_strategy_mix(DeviceContext& device, const DeviceScene& ds, Re
 std::string image_settings(const RenderArgs& args, const RenderOptions& options) {
     std::ostringstream line;
     line << "integrator=" << args.integrator << " light_subpaths=" << args.light_subpaths
-         << " connections=" << args.connections << " sampler=" << sampler_name(options.sampler)
+         << " connections=" << args.connections << " light_samples=" << light_sampling_name(options.light_sampling)
+         << " sampler=" << sampler_name(options.sampler)
          << " max_depth=" << options.max_depth << " seed=" << options.seed << " all_features=" << options.all_features
          << " strategy_images=" << int(options.strategy_images) << " debug_nan_pixel=" << options.debug_nan_pixel;
     if (options.sampler == SamplerKind::ZSobol) line << " spp=" << options.spp;
@@ -302,6 +305,7 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
         throw Error("--light-subpaths and --connections apply to bdpt, not " + args.integrator);
     if (args.light_subpaths >= 0) options.light_subpaths = args.light_subpaths;
     if (!args.connections.empty()) options.inner_connections = args.connections == "on";
+    options.light_sampling = parse_light_sampling(args.light_samples);
     // Padded Sobol by default, by measurement (README "Samplers"): ZSobol lowers bdpt's error
     // where the light image dominates (the Cornell box) but costs more per sample than it gains
     // where light subpaths and connections carry the image (lamp-ceiling), and pt gains nothing.
@@ -542,6 +546,10 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
         j["light_subpaths"] = options.integrator == Integrator::Bdpt ? options.light_subpaths
                               : options.integrator == Integrator::Lt ? 1.0f : 0.0f;
         j["inner_connections"] = options.integrator == Integrator::Bdpt && options.inner_connections;
+        // What the light samples did: a sample of every light group, or one light each.
+        j["light_samples"] = std::find(st.defines.begin(), st.defines.end(), "NEE_EVERY_LIGHT") != st.defines.end()
+                                 ? "every"
+                                 : "one";
         if (!mix_note.empty()) j["strategy_mix_note"] = mix_note;
         if (run_pilot) {
             nlohmann::json p;
@@ -718,6 +726,11 @@ int main(int argc, char** argv) {
     render->add_option("--connections", args.connections,
                        "bdpt: on (default) or off: whether subpaths are joined by connections with s >= 2 and t >= 2")
         ->check(CLI::IsMember({"on", "off"}));
+    render->add_option("--light-samples", args.light_samples,
+                       "auto (default): at each path vertex, a light sample of every light group (the area lights "
+                       "together, every other light alone) in a scene without media that has 2 to 8 groups, else "
+                       "one light sample; every or one fixes it")
+        ->check(CLI::IsMember({"auto", "every", "one"}));
     render->add_option("--sampler", args.sampler,
                        "sobol (default): padded Owen-scrambled Sobol, every decision stratified over a pixel's "
                        "samples; zsobol: the same points ordered over the image in Morton order, stratified over "

@@ -34,13 +34,28 @@ SamplerKind parse_sampler(const std::string& name) {
     throw Error("unknown sampler '" + name + "' (expected sobol, zsobol or independent)");
 }
 
+const char* light_sampling_name(LightSampling sampling) {
+    switch (sampling) {
+    case LightSampling::Every: return "every";
+    case LightSampling::One: return "one";
+    default: return "auto";
+    }
+}
+
+LightSampling parse_light_sampling(const std::string& name) {
+    if (name == "auto") return LightSampling::Auto;
+    if (name == "every") return LightSampling::Every;
+    if (name == "one") return LightSampling::One;
+    throw Error("unknown light sampling '" + name + "' (expected auto, every or one)");
+}
+
 int light_group_count(const DeviceScene& scene) {
     const int area = scene.info.area_light_count;
     return int(scene.lights.size()) - area + (area > 0 ? 1 : 0);
 }
 
 std::vector<std::string> kernel_defines(const DeviceScene& scene, Integrator integrator, int max_depth,
-                                        bool all_features, SamplerKind sampler) {
+                                        bool all_features, SamplerKind sampler, LightSampling light_sampling) {
     bool area = false, point = false, spot = false, directional = false, environment = false;
     for (const Light& l : scene.lights) {
         area |= l.kind == LIGHT_AREA;
@@ -89,7 +104,10 @@ std::vector<std::string> kernel_defines(const DeviceScene& scene, Integrator int
     // 0.95-1.10x). Else, with a few lights among them spots, one sample that skips the spots
     // whose cone does not reach the point (a loop over the lights per sample).
     const int groups = light_group_count(scene);
-    if (!media && groups >= 2 && groups <= kEveryLightMaxGroups) d.push_back("NEE_EVERY_LIGHT");
+    const bool every_light = light_sampling == LightSampling::Auto
+                                 ? !media && groups >= 2 && groups <= kEveryLightMaxGroups
+                                 : light_sampling == LightSampling::Every && groups >= 1;
+    if (every_light) d.push_back("NEE_EVERY_LIGHT");
     else if (spot && scene.lights.size() <= kConeAwareMaxLights) d.push_back("NEE_CONE_AWARE");
     // The map's code reads buffers that exist only with a map; "all features" keeps it off
     // unless the scene has one.

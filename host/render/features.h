@@ -32,8 +32,16 @@ constexpr int kEveryLightMaxGroups = 8;
 // The light groups of NEE_EVERY_LIGHT: 1 for all the area lights, 1 for each other light.
 int light_group_count(const DeviceScene& scene);
 
+// How light samples (s = 1) choose their lights (cl/lights.h): auto by the rule of
+// kernel_defines, a sample of every light group (NEE_EVERY_LIGHT), or one light per sample.
+enum class LightSampling { Auto = 0, Every = 1, One = 2 };
+
+const char* light_sampling_name(LightSampling sampling);
+LightSampling parse_light_sampling(const std::string& name);  // throws Error
+
 // all_features: every HAS_* flag on (the unspecialised build, for benchmarks and tests).
 std::vector<std::string> kernel_defines(const DeviceScene& scene, Integrator integrator, int max_depth,
-                                        bool all_features = false, SamplerKind sampler = SamplerKind::Independent);
+                                        bool all_features = false, SamplerKind sampler = SamplerKind::Independent,
+                                        LightSampling light_sampling = LightSampling::Auto);
 
 }  // namespace clbdpt

@@ -49,7 +49,8 @@ Renderer::Renderer(DeviceContext& device, const DeviceScene& scene, const Render
         zsobol_base4_digits_ = log2_resolution + (zsobol_log2_spp_ + 1) / 2;
     }
     local_size_ = options.local_size > 0 ? options.local_size : (device.entry().type == "CPU" ? kCpuLocalSize : 0);
-    stats_.defines = kernel_defines(scene, options.integrator, options.max_depth, options.all_features, options.sampler);
+    stats_.defines = kernel_defines(scene, options.integrator, options.max_depth, options.all_features, options.sampler,
+                                    options.light_sampling);
     if (options.strategy_images != RenderOptions::StrategyImages::Off) {
         stats_.defines.push_back("STRATEGY_IMAGES");
         if (options.strategy_images == RenderOptions::StrategyImages::Unweighted)

@@ -33,6 +33,7 @@ struct RenderOptions {
     // sample (0 .. 1) and whether s >= 2, t >= 2 connections are made. pt and lt ignore it.
     float light_subpaths = 1.0f;
     bool inner_connections = true;
+    LightSampling light_sampling = LightSampling::Auto;  // how light samples choose lights
     uint32_t seed = 0;
     bool all_features = false;  // build the unspecialised kernel
     int batch_items = 0;        // work items per launch; 0 = automatic
