@@ -82,8 +82,9 @@ TEST_F(CliTest, BadInputGivesOneErrorLineAndNoOutput) {
         EXPECT_NE(r.output.find(c.expected), std::string::npos) << c.name << ": " << r.output;
         // One line: the error, nothing after it.
         size_t err = r.output.find("clbdpt: error: ");
-        if (err != std::string::npos)
+        if (err != std::string::npos) {
             EXPECT_EQ(r.output.find('\n', err), r.output.size() - 1) << c.name << ": " << r.output;
+        }
         EXPECT_TRUE(dir_is_empty()) << c.name << ": left a file behind";
     }
     fs::remove_all(broken_kernels);
