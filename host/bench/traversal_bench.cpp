@@ -527,6 +527,7 @@ private:
 };
 #endif
 
+#ifdef CLBDPT_HAVE_EMBREE
 // Fraction of rays on which two tracers agree: hit/miss, and for closest hits t within 1e-3
 // relative (the triangle may differ at shared edges or exactly overlapping walls and lights).
 double agreement(const RaySet& rays, const TraceResult& a, const TraceResult& b) {
@@ -542,6 +543,7 @@ double agreement(const RaySet& rays, const TraceResult& a, const TraceResult& b)
     }
     return double(same) / double(n);
 }
+#endif
 
 void run_scene(const Scene& scene, const Options& opt, DeviceContext& ctx) {
     const std::vector<Triangle>& input = scene.triangles;
