@@ -154,28 +154,6 @@ inline int nee_group_count(const SceneData* scene) {
     return scene->info->light_count - area + (area > 0 ? 1 : 0);
 }
 
-/* The light that group g's sample from x takes with draw u_light, and the probability it had
- * (*pick_pdf); -1 if the group cannot light x. */
-inline int nee_group_light(const SceneData* scene, int g, float3 x, float u_light, float* pick_pdf) {
-    int area = scene->info->area_light_count;
-    *pick_pdf = 0.0f;
-    if (area > 0) {
-        if (g == 0) {
-            float area_total = scene->light_cdf[area];
-            if (!(area_total > 0.0f)) return -1;
-            int i = find_interval(scene->light_cdf, area, u_light * area_total);
-            *pick_pdf = scene->lights[i].select_pdf / area_total;
-            return i;
-        }
-        g -= 1;
-    }
-    int i = area + g;
-    __global const Light* light = &scene->lights[i];
-    if (light->kind == LIGHT_SPOT && !spot_contains(light, normalize(x - xyz(light->position)))) return -1;
-    *pick_pdf = 1.0f;
-    return i;
-}
-
 /* The probability that the light samples from x take light i. */
 inline float nee_light_probability(const SceneData* scene, int i, float3 x) {
     int area = scene->info->area_light_count;
@@ -186,6 +164,21 @@ inline float nee_light_probability(const SceneData* scene, int i, float3 x) {
     }
     if (light->kind == LIGHT_SPOT) return spot_contains(light, normalize(x - xyz(light->position))) ? 1.0f : 0.0f;
     return 1.0f;
+}
+
+/* The light that group g's sample from x takes with draw u_light, and the probability it had
+ * (*pick_pdf, the one the MIS weights use); -1 if the group cannot light x. */
+inline int nee_group_light(const SceneData* scene, int g, float3 x, float u_light, float* pick_pdf) {
+    int area = scene->info->area_light_count;
+    int i;
+    if (area > 0 && g == 0) {
+        float area_total = scene->light_cdf[area];
+        i = area_total > 0.0f ? find_interval(scene->light_cdf, area, u_light * area_total) : 0;
+    } else {
+        i = area + g - (area > 0 ? 1 : 0);
+    }
+    *pick_pdf = nee_light_probability(scene, i, x);
+    return *pick_pdf > 0.0f ? i : -1;
 }
 #endif
 

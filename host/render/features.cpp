@@ -49,10 +49,15 @@ LightSampling parse_light_sampling(const std::string& name) {
     throw Error("unknown light sampling '" + name + "' (expected auto, every or one)");
 }
 
+namespace {
+
+// The light groups of NEE_EVERY_LIGHT: 1 for all the area lights, 1 for each other light.
 int light_group_count(const DeviceScene& scene) {
     const int area = scene.info.area_light_count;
     return int(scene.lights.size()) - area + (area > 0 ? 1 : 0);
 }
+
+}  // namespace
 
 std::vector<std::string> kernel_defines(const DeviceScene& scene, Integrator integrator, int max_depth,
                                         bool all_features, SamplerKind sampler, LightSampling light_sampling) {

@@ -29,9 +29,6 @@ constexpr size_t kConeAwareMaxLights = 8;
 // cl/lights.h): one shadow ray per group.
 constexpr int kEveryLightMaxGroups = 8;
 
-// The light groups of NEE_EVERY_LIGHT: 1 for all the area lights, 1 for each other light.
-int light_group_count(const DeviceScene& scene);
-
 // How light samples (s = 1) choose their lights (cl/lights.h): auto by the rule of
 // kernel_defines, a sample of every light group (NEE_EVERY_LIGHT), or one light per sample.
 enum class LightSampling { Auto = 0, Every = 1, One = 2 };
