@@ -210,12 +210,22 @@ TEST_F(ImageIoTest, ReadingAMissingFileNamesIt) {
     }
 }
 
+// The folder of the test running in this fresh process. The process ends by _Exit, so no
+// TearDown removes it: end_fresh_process does.
+fs::path g_fresh_process_dir;
+
+[[noreturn]] void end_fresh_process(int status) {
+    std::error_code ec;
+    fs::remove_all(g_fresh_process_dir, ec);
+    std::_Exit(status);
+}
+
 // Fails the fresh process (exit status 1, the reason on stderr) unless `ok`.
 void require(bool ok, const std::string& what) {
     if (ok) return;
     std::fprintf(stderr, "FAILED: %s\n", what.c_str());
     std::fflush(stderr);
-    std::_Exit(1);
+    end_fresh_process(1);
 }
 
 std::string read_bytes(const std::string& path) {
@@ -232,6 +242,7 @@ protected:
     void SetUp() override {
         ::testing::GTEST_FLAG(death_test_style) = "threadsafe";
         ImageIoTest::SetUp();
+        g_fresh_process_dir = dir_;
     }
 };
 
@@ -266,7 +277,7 @@ TEST_F(ImageIoProcessTest, WritesWhatThisProcessWrites) {
         require(read_bytes(file("there.png")) == read_bytes(file("here.png")), "the PNGs are identical");
         require(!read_bytes(file("there.png")).empty(), "the PNG is not empty");
         require(entries() == 4, "no temporary file is left");
-        std::_Exit(0);
+        end_fresh_process(0);
     };
     EXPECT_EXIT(body(), ::testing::ExitedWithCode(0), "");
 }
@@ -297,7 +308,7 @@ TEST_F(ImageIoProcessTest, ReadsWhatThisProcessReads) {
         require(texture_here.rgba8 == texture_there.rgba8 && !texture_there.rgba8.empty() &&
                     texture_here.width == texture_there.width && !texture_there.is_float,
                 "the texture reads the same here, as 8-bit values");
-        std::_Exit(0);
+        end_fresh_process(0);
     };
     EXPECT_EXIT(body(), ::testing::ExitedWithCode(0), "");
 }
@@ -311,7 +322,7 @@ TEST_F(ImageIoProcessTest, ADeadProcessLeavesTheWriteToThisOne) {
         require(image_io_process_id() == -1, "the dead process is dropped");
         int w = 0, h = 0;
         require(read_image_rgb(file("out.exr"), &w, &h) == rgb, "the image is written all the same");
-        std::_Exit(0);
+        end_fresh_process(0);
     };
     EXPECT_EXIT(body(), ::testing::ExitedWithCode(0), "");
 }
@@ -328,7 +339,7 @@ TEST_F(ImageIoProcessTest, ALargeImageIsWrittenHere) {
         require(image_io_process_id() > 0, "the process is kept for smaller images");
         int w = 0, h = 0;
         require(read_image_rgb(file("large.exr"), &w, &h) == rgb, "the image is written");
-        std::_Exit(0);
+        end_fresh_process(0);
     };
     EXPECT_EXIT(body(), ::testing::ExitedWithCode(0), "");
 }
@@ -342,7 +353,7 @@ TEST_F(ImageIoProcessTest, NotForkedBesideAThread) {
         waiting.join();
         require(!started, "no fork beside a running thread");
         require(image_io_process_id() == -1, "no process");
-        std::_Exit(0);
+        end_fresh_process(0);
     };
     EXPECT_EXIT(body(), ::testing::ExitedWithCode(0), "");
 }

@@ -769,7 +769,8 @@ int main(int argc, char** argv) {
         ->check(CLI::PositiveNumber);
     render->add_option("--resume", args.resume,
                        "Go on from a checkpoint of the same scene and settings up to --spp (or for --time more "
-                       "seconds); the image equals an uninterrupted render's bit for bit on the same device. Goes "
+                       "seconds); the image equals an uninterrupted render's without adaptive samples (--checkpoint "
+                       "or --adaptive off) bit for bit on the same device. Goes "
                        "on checkpointing into FILE unless --checkpoint names another");
     render->add_flag("-v,--verbose", args.verbose, "Print device, BVH and kernel flags");
     // Tests only (no group: not in --help): that pixel's sample 0 gets a NaN contribution.
