@@ -62,6 +62,9 @@ enum MaterialIndex { kDiffuse = 0, kGlossyRough, kGlossySharp, kMirror, kGlass, 
 
 const D3 kBig0(-0.8, 2.0, -0.6), kBig1(0.9, 2.0, -0.5), kBig2(0.1, 2.0, 0.9);  // faces down
 const D3 kSmall0(1.6, 0.8, 0.3), kSmall1(1.7, 1.3, 0.1), kSmall2(1.5, 1.0, -0.3);
+// An emitter that faces the camera, so that paths of the lens and an area light seen directly
+// (strategies (0,2) and (1,1)) are among those tested; the other two face away or graze.
+const D3 kFacing0(-0.9, 0.9, 2.5), kFacing1(-0.3, 0.9, 2.5), kFacing2(-0.6, 1.5, 2.5);
 const D3 kPointPos(-0.9, 1.6, 0.4), kSpotPos(0.8, 2.2, -0.2), kSpotTarget(0.2, 0, 0.3);
 const D3 kDirectionalDir = normalize(D3(0.3, -1, 0.25));
 
@@ -89,6 +92,7 @@ Scene mis_scene() {
     add_material(s, make_material(MATERIAL_DIFFUSE, {0, 0, 0}, {}, {20, 15, 10}));
     add_triangle(s, kBig0, kBig2, kBig1, kEmitBig);
     add_triangle(s, kSmall0, kSmall1, kSmall2, kEmitSmall);
+    add_triangle(s, kFacing0, kFacing2, kFacing1, kEmitSmall);
     add_quad(s, {-2, -0.5, -2}, {-2, -0.5, 2}, {2, -0.5, 2}, {2, -0.5, -2}, kDiffuse);
     LightDesc point;
     point.kind = LightDesc::Kind::Point;
@@ -407,12 +411,13 @@ Densities densities(const Reference& ref, const Path& path) {
 struct Mix {
     double light_subpaths = 1;  // light subpaths per pixel sample
     bool inner_connections = true;
+    bool light_to_lens = true;  // bdpt's (1,1): with a thin lens or media (check_integrator sets it)
 };
 
 bool uses_light_subpath(int s, int t) { return s >= 2 || t == 1; }
 
 // strategy_enabled's rules, restated: t >= 1, s + t >= 2; (1,1) only for area lights; pt uses
-// s <= 1 < t, lt uses t = 1; bdpt what the mix allows.
+// s <= 1 < t, lt uses t = 1; bdpt what the mix allows, (1,1) with a thin lens or media only.
 bool enabled(Integrator integrator, const Mix& mix, int s, int t, bool area) {
     if (t < 1 || s + t < 2) return false;
     if (s == 1 && t == 1 && !area) return false;
@@ -420,6 +425,7 @@ bool enabled(Integrator integrator, const Mix& mix, int s, int t, bool area) {
     case Integrator::Pt: return s <= 1 && t >= 2;
     case Integrator::Lt: return t == 1;
     default:
+        if (s == 1 && t == 1 && !mix.light_to_lens) return false;
         if (s >= 2 && t >= 2 && !mix.inner_connections) return false;
         return !uses_light_subpath(s, t) || mix.light_subpaths > 0;
     }
@@ -722,6 +728,7 @@ constexpr double kSumTolerance = 1e-4;
 void check_integrator(Integrator integrator, bool thin, uint64_t seed, Mix mix = Mix(), bool media = false) {
     const TestScene& ts = media ? media_scene() : scene();
     Camera cam = make_camera(camera_desc(thin), kWidth, kHeight);
+    mix.light_to_lens = thin || media;
     Reference ref(ts.ds, cam);
     // Light samples take a light of each of the vacuum scene's 5 light groups (NEE_EVERY_LIGHT);
     // in media, one light, skipping the spot where its cone does not reach (NEE_CONE_AWARE).
@@ -745,6 +752,7 @@ void check_integrator(Integrator integrator, bool thin, uint64_t seed, Mix mix =
     std::vector<size_t> per_kind(5, 0);
     size_t across_terminator = 0;  // paths across a terminator band with two or more producers
     size_t medium_vertices = 0;
+    size_t area_light_seen = 0;  // paths x_0 x_1 of the lens and an area light: (0,2) and maybe (1,1)
     while (paths.size() < target && attempts < 200 * target) {
         ++attempts;
         int scatter = int(gen.u() * 6);  // depth 0 .. 5
@@ -776,6 +784,7 @@ void check_integrator(Integrator integrator, bool thin, uint64_t seed, Mix mix =
         }
         if (producers.empty()) continue;
         if (path.across_terminator && producers.size() >= 2) ++across_terminator;
+        if (n == 2 && area) ++area_light_seen;
         for (const HostVertex& v : path.x) medium_vertices += v.medium;
         size_t index = paths.size();
         paths.push_back(path);
@@ -804,6 +813,8 @@ void check_integrator(Integrator integrator, bool thin, uint64_t seed, Mix mix =
     if (media) {
         EXPECT_GT(medium_vertices, target / 2) << "medium vertices";  // about 1.2 per path
     }
+    // Whether bdpt joins a light point to the lens ((1,1), with a thin lens only) shows in them.
+    EXPECT_GT(area_light_seen, target / 100) << "paths of an area light seen directly";
     // Full bdpt has the most strategies that can connect at such a vertex.
     if (integrator == Integrator::Bdpt && mix.light_subpaths == 1 && mix.inner_connections) {
         EXPECT_GT(across_terminator, target / 50) << "terminator paths";
@@ -821,6 +832,7 @@ void check_integrator(Integrator integrator, bool thin, uint64_t seed, Mix mix =
     k.setArg(SceneBuffers::kSceneArgCount + 2, out);
     k.setArg(SceneBuffers::kSceneArgCount + 3, float(mix.light_subpaths));
     k.setArg(SceneBuffers::kSceneArgCount + 4, cl_int(mix.inner_connections ? 1 : 0));
+    k.setArg(SceneBuffers::kSceneArgCount + 5, cl_int(mix.light_to_lens ? 1 : 0));
     launch(k, cases.size());
     std::vector<float> w = download<float>(out, cases.size());
 

@@ -52,12 +52,14 @@ inline PathVertex path_vertex(__global const TestVertex* v) {
     return r;
 }
 
-/* out[i] = mis_weight of case i under the strategy mix (light_subpaths, inner_connections), with the freshly sampled connection vertex built exactly as
+/* out[i] = mis_weight of case i under the strategy mix (light_subpaths, inner_connections,
+ * light_to_lens), with the freshly sampled connection vertex built exactly as
  * connect_bdpt builds it: for t = 1 the lens point (normal = the viewing direction, densities
  * 0), for s = 1 (t > 1) the light point with pdf_fwd = vertex_pdf_light_origin toward the
  * camera subpath's end. */
 __kernel void mis_weight_test(SCENE_KERNEL_ARGS, __global const TestVertex* vertices, __global const MisCase* cases,
-                              __global float* out, float light_subpaths, int inner_connections) {
+                              __global float* out, float light_subpaths, int inner_connections,
+                              int light_to_lens) {
     int gid = get_global_id(0);
     uint rays = 0;
     SceneData scene = SCENE_DATA_FROM_KERNEL_ARGS(&rays);
@@ -65,6 +67,7 @@ __kernel void mis_weight_test(SCENE_KERNEL_ARGS, __global const TestVertex* vert
     StrategyMix mix;
     mix.light_subpaths = light_subpaths;
     mix.inner_connections = inner_connections;
+    mix.light_to_lens = light_to_lens;
     PathVertex light_path[TEST_MAX_VERTICES], camera_path[TEST_MAX_VERTICES];
     for (int j = 0; j < c.s; ++j) light_path[j] = path_vertex(&vertices[c.light_offset + j]);
     for (int j = 0; j < c.t; ++j) camera_path[j] = path_vertex(&vertices[c.camera_offset + j]);

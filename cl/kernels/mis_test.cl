@@ -34,9 +34,7 @@ __kernel void mis_weight_sums(SCENE_KERNEL_ARGS, RenderParams params, __global f
     if (gid >= params.pixel_count) return;
     uint rays = 0;
     SceneData scene = SCENE_DATA_FROM_KERNEL_ARGS(&rays);
-    StrategyMix mix;
-    mix.light_subpaths = params.light_subpaths;
-    mix.inner_connections = params.inner_connections;
+    StrategyMix mix = strategy_mix_of(&params);
     int pixel = params.first_pixel + gid;
     Rng rng = rng_init((uint)pixel, params.sample_index, params.seed);
     float2 raster = (float2)((float)(pixel % params.width), (float)(pixel / params.width)) + rng_next2(&rng);

@@ -84,9 +84,7 @@ __kernel void render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, __global float
     camera_out[gid] = (float4)(sum.L.x, sum.L.y, sum.L.z,
                                sum.bad_strategy < 0 ? (float)rays_traced : -1.0f - (float)sum.bad_strategy);
 #else
-    StrategyMix mix;
-    mix.light_subpaths = params.light_subpaths;
-    mix.inner_connections = params.inner_connections;
+    StrategyMix mix = strategy_mix_of(&params);
 
     PathVertex camera_path[MAX_DEPTH + 2];
     PathVertex light_path[MAX_DEPTH + 1];
@@ -133,13 +131,14 @@ __kernel void render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, __global float
                 float weight;
                 float3 unweighted = connect_bdpt(&scene, &mix, &rng, light_path, camera_path, s, t, g,
                                                  &splat_raster, &weight);
+#ifdef DEBUG_NAN_PIXEL
+                /* Every strategy the sample tries, whether or not its connection carries light. */
+                if (pixel == DEBUG_NAN_PIXEL && sample_index == 0) unweighted = (float3)(NAN);
+#endif
                 if (is_black(unweighted)) continue;
                 /* Divided by the strategy's samples per pixel sample (its light subpath may be
                  * traced for only a fraction of the samples). */
                 float3 c = unweighted * (weight / strategy_sample_count(&mix, s, t));
-#ifdef DEBUG_NAN_PIXEL
-                if (pixel == DEBUG_NAN_PIXEL && sample_index == 0) c = (float3)(NAN);
-#endif
                 /* NaN or Inf in any channel makes the difference NaN (isfinite on each channel
                  * cost PoCL 15% of a path tracer's samples per second). */
                 float probe = c.x + c.y + c.z;
@@ -178,6 +177,14 @@ __kernel void render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, __global float
             }
         }
     }
+#ifdef DEBUG_NAN_PIXEL
+    /* A sample that tried no strategy (its camera ray left the scene past mirrors): its camera
+     * image, reported as s = 0 with t = the camera subpath's vertices. */
+    if (pixel == DEBUG_NAN_PIXEL && sample_index == 0 && bad_strategy < 0) {
+        L = (float3)(NAN);
+        bad_strategy = n_camera;
+    }
+#endif
     camera_out[gid] = (float4)(L.x, L.y, L.z, bad_strategy < 0 ? (float)rays_traced : -1.0f - (float)bad_strategy);
 #endif
 }

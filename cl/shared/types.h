@@ -227,7 +227,9 @@ typedef struct {
      * position sample position_sample_index + i / run_length), pixel_stride unused. */
     clbdpt_int run_pixel;
     clbdpt_int run_length;
-    clbdpt_int pad2; /* the maximum depth is the kernel's MAX_DEPTH, not a parameter */
+    /* Whether bdpt uses strategy (1,1) (cl/strategies.h): with a thin lens or media. (The
+     * maximum depth is the kernel's MAX_DEPTH, not a parameter.) */
+    clbdpt_int light_to_lens;
 } RenderParams;
 
 /* Work items of a pass with pixel_stride `stride` over a width x height film. */

@@ -136,7 +136,7 @@ CLBDPT_CHECK_FIELD(RenderParams, zsobol_log2_spp, 44);
 CLBDPT_CHECK_FIELD(RenderParams, zsobol_base4_digits, 48);
 CLBDPT_CHECK_FIELD(RenderParams, run_pixel, 52);
 CLBDPT_CHECK_FIELD(RenderParams, run_length, 56);
-CLBDPT_CHECK_FIELD(RenderParams, pad2, 60);
+CLBDPT_CHECK_FIELD(RenderParams, light_to_lens, 60);
 
 CLBDPT_CHECK_STRUCT(SplatRecord, 16, 4);
 CLBDPT_CHECK_FIELD(SplatRecord, r, 0);

@@ -154,6 +154,7 @@ RenderParams Renderer::batch_params(const PassSpec& pass, int first_item, int it
     const bool bdpt = options_.integrator == Integrator::Bdpt;
     params.light_subpaths = bdpt ? options_.light_subpaths : 1.0f;
     params.inner_connections = bdpt ? (options_.inner_connections ? 1 : 0) : 1;
+    params.light_to_lens = scene_.camera.lens_radius > 0 || !scene_.media.empty() ? 1 : 0;
     return params;
 }
 
