@@ -138,5 +138,34 @@ TEST(Integrators, StrategyImagesSumToTheImage) {
     }
 }
 
+// bdpt joins a light point straight to the lens (strategy (1,1), cl/strategies.h) only with a
+// thin lens or in a scene with media: through a pinhole in vacuum s = 0 sees an emitter without
+// noise. The Cornell box's light is in view, so (1,1) carries light wherever it is on.
+TEST(Integrators, LightToLensOnlyThroughALensOrInMedia) {
+    struct Case {
+        const char* scene;
+        float lens_radius;
+        bool light_to_lens;
+    };
+    for (const Case& c : {Case{"cornell-box", 0.0f, false}, Case{"cornell-box", 0.05f, true},
+                          Case{"cornell-fog", 0.0f, true}}) {
+        Scene loaded = load_scene(scene_path(c.scene));
+        loaded.camera.lens_radius = c.lens_radius;
+        DeviceScene scene = build_device_scene(loaded, 24, 24);
+        RenderOptions options;
+        options.max_depth = 3;
+        options.strategy_images = RenderOptions::StrategyImages::Weighted;
+        Renderer renderer(test_device(), scene, options);
+        Film film(24, 24);
+        renderer.render_passes(film, 0, 4);
+        double light_to_lens = 0;
+        for (float v : film.strategy_image(1, 1)) light_to_lens += v;
+        if (c.light_to_lens)
+            EXPECT_GT(light_to_lens, 0.0) << c.scene << " lens radius " << c.lens_radius;
+        else
+            EXPECT_EQ(light_to_lens, 0.0) << c.scene << " lens radius " << c.lens_radius;
+    }
+}
+
 }  // namespace
 }  // namespace clbdpt::test
