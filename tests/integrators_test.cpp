@@ -110,21 +110,27 @@ INSTANTIATE_TEST_SUITE_P(Samplers, BatchingTest, ::testing::Values(SamplerKind::
 namespace clbdpt::test {
 namespace {
 
+// 4 passes of bdpt over a 24 x 24 film, with weighted strategy images.
+constexpr int kStrategyImagesMaxDepth = 3;
+Film render_strategy_images(const DeviceScene& scene) {
+    RenderOptions options;
+    options.max_depth = kStrategyImagesMaxDepth;
+    options.strategy_images = RenderOptions::StrategyImages::Weighted;
+    Renderer renderer(test_device(), scene, options);
+    Film film(24, 24);
+    renderer.render_passes(film, 0, 4);
+    return film;
+}
+
 // The strategy images split the image: their sum is the image (up to float rounding of the
 // per-sample products). On point-spot a sample's s = 1 strategies take a light sample of each of
 // its two lights (NEE_EVERY_LIGHT), which add into one record per (s, t).
 TEST(Integrators, StrategyImagesSumToTheImage) {
     for (const char* name : {"cornell-box", "point-spot"}) {
-        DeviceScene scene = build_device_scene(load_scene(scene_path(name)), 24, 24);
-        RenderOptions options;
-        options.max_depth = 3;
-        options.strategy_images = RenderOptions::StrategyImages::Weighted;
-        Renderer renderer(test_device(), scene, options);
-        Film film(24, 24);
-        renderer.render_passes(film, 0, 4);
+        const Film film = render_strategy_images(build_device_scene(load_scene(scene_path(name)), 24, 24));
         std::vector<float> image = film.image();
         std::vector<double> sum(image.size(), 0.0);
-        for (int depth = 0; depth <= options.max_depth; ++depth)
+        for (int depth = 0; depth <= kStrategyImagesMaxDepth; ++depth)
             for (int t = 1; t <= depth + 2; ++t) {
                 std::vector<float> part = film.strategy_image(depth + 2 - t, t);
                 for (size_t i = 0; i < sum.size(); ++i) sum[i] += part[i];
@@ -151,13 +157,7 @@ TEST(Integrators, LightToLensOnlyThroughALensOrInMedia) {
                           Case{"cornell-fog", 0.0f, true}}) {
         Scene loaded = load_scene(scene_path(c.scene));
         loaded.camera.lens_radius = c.lens_radius;
-        DeviceScene scene = build_device_scene(loaded, 24, 24);
-        RenderOptions options;
-        options.max_depth = 3;
-        options.strategy_images = RenderOptions::StrategyImages::Weighted;
-        Renderer renderer(test_device(), scene, options);
-        Film film(24, 24);
-        renderer.render_passes(film, 0, 4);
+        const Film film = render_strategy_images(build_device_scene(loaded, 24, 24));
         double light_to_lens = 0;
         for (float v : film.strategy_image(1, 1)) light_to_lens += v;
         if (c.light_to_lens)

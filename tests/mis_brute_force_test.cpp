@@ -813,7 +813,7 @@ void check_integrator(Integrator integrator, bool thin, uint64_t seed, Mix mix =
     if (media) {
         EXPECT_GT(medium_vertices, target / 2) << "medium vertices";  // about 1.2 per path
     }
-    // Whether bdpt joins a light point to the lens ((1,1), with a thin lens only) shows in them.
+    // Whether bdpt joins a light point to the lens ((1,1), with a thin lens or media) shows in them.
     EXPECT_GT(area_light_seen, target / 100) << "paths of an area light seen directly";
     // Full bdpt has the most strategies that can connect at such a vertex.
     if (integrator == Integrator::Bdpt && mix.light_subpaths == 1 && mix.inner_connections) {
