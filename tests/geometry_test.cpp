@@ -29,10 +29,7 @@ Scene box_scene() {
     add_quad(s, {-2, 0, -2}, {-2, 0, 2}, {2, 0, 2}, {2, 0, -2}, m);
     add_quad(s, {-2, 2, -2}, {2, 2, -2}, {2, 2, 2}, {-2, 2, 2}, m);
     add_triangle(s, kOcc0, kOcc1, kOcc2, m);
-    LightDesc point;
-    point.kind = LightDesc::Kind::Point;
-    point.position = {0.2f, 1.5f, 0.1f};
-    point.color = {1, 1, 1};
+    LightDesc point = point_light({0.2f, 1.5f, 0.1f}, {1, 1, 1});
     LightDesc dir;
     dir.kind = LightDesc::Kind::Directional;
     dir.direction = {0, -1, 0};

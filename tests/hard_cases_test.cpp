@@ -316,18 +316,8 @@ TEST(HardCases, LightSamplesOfEveryGroupAgreeWithTheLightTracer) {
     room_walls(b, m);
     ceiling_light(b, {-0.4f, 1.999f, 0.3f}, 0.5f, m.light);
     ceiling_light(b, {0.5f, 1.999f, -0.2f}, 0.25f, m.light);
-    LightDesc point;
-    point.kind = LightDesc::Kind::Point;
-    point.position = {0.7f, 1.2f, 0.6f};
-    point.color = {1.5f, 1.5f, 1.5f};
-    LightDesc spot;
-    spot.kind = LightDesc::Kind::Spot;
-    spot.position = {-0.3f, 1.9f, -0.5f};
-    spot.target = {-0.2f, 0.0f, 0.4f};
-    spot.cone_angle = 30;
-    spot.cone_delta = 5;
-    spot.color = {4, 3, 2};
-    b.scene.lights = {point, spot};
+    b.scene.lights = {point_light({0.7f, 1.2f, 0.6f}, {1.5f, 1.5f, 1.5f}),
+                      spot_light({-0.3f, 1.9f, -0.5f}, {-0.2f, 0.0f, 0.4f}, {4, 3, 2}, 30, 5)};
     room_camera(b);
     ASSERT_TRUE(kernel_has_define(b.scene, "NEE_EVERY_LIGHT"));
     DeviceScene scene = build_device_scene(b.scene, kFilm, kFilm);

@@ -39,17 +39,8 @@ Scene light_scene(bool env_map) {
     int emit = add_material(s, make_material(MATERIAL_DIFFUSE, {0, 0, 0}, {}, {4, 3, 2}));
     add_quad(s, {-2, 0, -2}, {-2, 0, 2}, {2, 0, 2}, {2, 0, -2}, floor);
     add_triangle(s, kAreaP0, kAreaP1, kAreaP2, emit);  // faces down (-y)
-    LightDesc point;
-    point.kind = LightDesc::Kind::Point;
-    point.position = v3(kPointPos);
-    point.color = {10, 8, 6};
-    LightDesc spot;
-    spot.kind = LightDesc::Kind::Spot;
-    spot.position = v3(kSpotPos);
-    spot.target = v3(kSpotTarget);
-    spot.color = {5, 4, 3};
-    spot.cone_angle = float(kSpotCone);
-    spot.cone_delta = float(kSpotDelta);
+    LightDesc point = point_light(v3(kPointPos), {10, 8, 6});
+    LightDesc spot = spot_light(v3(kSpotPos), v3(kSpotTarget), {5, 4, 3}, float(kSpotCone), float(kSpotDelta));
     LightDesc dir;
     dir.kind = LightDesc::Kind::Directional;
     dir.direction = v3(kDirectionalDir);

@@ -221,13 +221,7 @@ Scene spot_light_in_fog(bool camera_in_fog, int* fog) {
     RoomMaterials m = room_materials(b);
     room_walls(b, m, /*with_block=*/camera_in_fog);  // the block would pierce the box of fog
     room_camera(b);
-    LightDesc spot;
-    spot.kind = LightDesc::Kind::Spot;
-    spot.position = {0.3f, 1.8f, 0.3f};
-    spot.target = {0.0f, 0.0f, 0.2f};
-    spot.color = {3, 3, 3};
-    spot.cone_angle = 20;
-    spot.cone_delta = 5;
+    LightDesc spot = spot_light({0.3f, 1.8f, 0.3f}, {0.0f, 0.0f, 0.2f}, {3, 3, 3}, 20, 5);
     b.scene.lights.push_back(spot);
     *fog = add_medium(b.scene, "fog", {0.1f, 0.1f, 0.1f}, {0.4f, 0.4f, 0.4f}, 0.2f);
     if (camera_in_fog) {

@@ -185,13 +185,7 @@ TEST(MediumGrids, SpotLightThroughSmokeInHazeAllEstimatorsAgree) {
     RoomMaterials m = room_materials(b);
     room_walls(b, m, /*with_block=*/false);  // the block would stand inside the smoke
     room_camera(b);
-    LightDesc spot;
-    spot.kind = LightDesc::Kind::Spot;
-    spot.position = {-0.2f, 1.9f, 0.1f};
-    spot.target = {-0.2f, 0.0f, 0.1f};
-    spot.color = {4, 4, 4};
-    spot.cone_angle = 25;
-    spot.cone_delta = 5;
+    LightDesc spot = spot_light({-0.2f, 1.9f, 0.1f}, {-0.2f, 0.0f, 0.1f}, {4, 4, 4}, 25, 5);
     b.scene.lights.push_back(spot);
     int haze = add_grid_medium(b.scene, "haze", {0.05f, 0.05f, 0.05f}, {0.2f, 0.25f, 0.3f}, 0.0f,
                                grid_of(2, 2, 1, {0.2f, 1.0f, 0.6f, 0.1f}), {-1, 0, -1}, {1, 2, 1});

@@ -53,6 +53,28 @@ inline void add_scene_triangle(Scene& scene, Vec3 a, Vec3 b, Vec3 c, int materia
     scene.bounds.extend(c);
 }
 
+// A point light of intensity `color` at `position`.
+inline LightDesc point_light(Vec3 position, Vec3 color) {
+    LightDesc l;
+    l.kind = LightDesc::Kind::Point;
+    l.position = position;
+    l.color = color;
+    return l;
+}
+
+// A spot light at `position` aimed at `target`: intensity `color`, a cone of half angle
+// cone_angle whose outer cone_delta degrees fall off.
+inline LightDesc spot_light(Vec3 position, Vec3 target, Vec3 color, float cone_angle, float cone_delta) {
+    LightDesc l;
+    l.kind = LightDesc::Kind::Spot;
+    l.position = position;
+    l.target = target;
+    l.color = color;
+    l.cone_angle = cone_angle;
+    l.cone_delta = cone_delta;
+    return l;
+}
+
 inline std::string scene_path(const std::string& name) {
     return std::string(CLBDPT_SCENES_DIR) + "/" + name + "/" + name + ".json";
 }
