@@ -1,0 +1,92 @@
+// The strategy pilot's variance estimates (render/strategy_pilot.h) against the same variances
+// measured on full passes. The pilot renders a sparse grid (one pixel of each 3 x 3 block of a
+// 256^2 film) and keeps only the grid's values: the camera sample of each grid pixel and the
+// light-image splats (t = 1) that land on the grid. A sparse pass traces the light subpaths of
+// one pixel in nine, so its light image's variance is scaled by nine to a full pass's. On the
+// Cornell box about two thirds of full bdpt's one-sample transport variance is the light
+// image's, so a splat lost on the way to the grid, or a wrong scale, shows.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "render/strategy_pilot.h"
+#include "test_scenes.h"
+
+namespace clbdpt::test {
+namespace {
+
+struct Variance {
+    double mean = 0, standard_error = 0;
+    double light = 0;  // the light image's part of mean
+};
+
+// The one-sample variance of light transport within the pixel, from pairs of full passes that
+// share their pixel positions: half the squared difference of the two per pixel and channel,
+// camera and light images together, as the pilot's transport variance.
+Variance full_pass_transport_variance(const DeviceScene& scene, const RenderOptions& options, int pairs) {
+    Renderer renderer(test_device(), scene, options);
+    const int width = scene.camera.width, height = scene.camera.height;
+    double sum = 0, sum_squares = 0, light = 0;
+    long pixels = 0;
+    for (int pair = 0; pair < pairs; ++pair) {
+        Film a(width, height), b(width, height);
+        PassSpec pass;
+        pass.position_seed = 7000u + uint32_t(pair);
+        pass.seed = 9000u + 2u * uint32_t(pair);
+        renderer.render_pass(a, pass);
+        pass.seed += 1;
+        renderer.render_pass(b, pass);
+        for (int p = 0; p < width * height; ++p) {
+            double term = 0;
+            for (int c = 0; c < 3; ++c) {
+                const size_t i = size_t(p) * 3 + size_t(c);
+                const double dc = a.camera_sum[i] - b.camera_sum[i], dl = a.light_sum[i] - b.light_sum[i];
+                term += 0.5 * (dc * dc + dl * dl);
+                light += 0.5 * dl * dl;
+            }
+            sum += term;
+            sum_squares += term * term;
+            ++pixels;
+        }
+    }
+    Variance v;
+    const double pixel_mean = sum / double(pixels);
+    v.mean = pixel_mean / 3.0;
+    v.light = light / double(pixels) / 3.0;
+    v.standard_error =
+        std::sqrt(std::max(0.0, sum_squares / double(pixels) - pixel_mean * pixel_mean) / double(pixels - 1)) / 3.0;
+    return v;
+}
+
+// Tolerance: 4.5 combined standard errors (each from the spread of its pixels' terms), for two
+// comparisons; the seeds are fixed, so a pass stays a pass.
+TEST(StrategyPilotVariance, TransportVarianceMatchesFullPasses) {
+    const int film = 256, max_depth = 5;
+    Scene loaded = load_scene(scene_path("cornell-box"));
+    DeviceScene scene = build_device_scene(loaded, film, film);
+    const RenderOptions options = make_options(Integrator::Bdpt, max_depth, 11, SamplerKind::Sobol);
+    RenderStats stats;
+    StrategyPilot pilot = run_strategy_pilot(test_device(), scene, options, 64, 0.0, &stats);
+    ASSERT_EQ(pilot.pixel_stride, 3) << "the test is about a sparse grid";
+    const uint64_t items = uint64_t(render_item_count(film, film, pilot.pixel_stride));
+    EXPECT_EQ(pilot.samples, items * 3 * pilot.candidates.size());
+    EXPECT_EQ(stats.samples, pilot.samples) << "every pilot sample is counted once";
+
+    for (const StrategyCandidate& c : pilot.candidates) {
+        if (!(c.integrator == Integrator::Pt || (c.light_subpaths == 1.0f && c.inner_connections))) continue;
+        RenderOptions o = make_options(c.integrator, max_depth, 11, SamplerKind::Sobol);
+        const Variance full = full_pass_transport_variance(scene, o, 2);
+        if (c.integrator == Integrator::Bdpt) {
+            ASSERT_GT(full.light, 0.4 * full.mean) << "the light image must carry much of bdpt's variance here";
+        }
+        const double z = std::fabs(c.variance_transport - full.mean) /
+                         std::hypot(c.variance_transport_standard_error, full.standard_error);
+        report_stat(c.name + "/transport variance", z, 4.5, z <= 4.5);
+        EXPECT_LE(z, 4.5)
+            << c.name << ": pilot " << c.variance_transport << " +- " << c.variance_transport_standard_error
+            << ", full passes " << full.mean << " +- " << full.standard_error << " (light image " << full.light << ")";
+    }
+}
+
+}  // namespace
+}  // namespace clbdpt::test
