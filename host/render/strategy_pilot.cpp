@@ -202,8 +202,8 @@ StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene
     // Round robin, so a change of the machine's load hits every candidate alike.
     const uint32_t seed_a = options.seed ^ 0x6a09e667u, seed_b = options.seed ^ 0xbb67ae85u,
                    seed_c = options.seed ^ 0x3c6ef372u;
-    std::vector<std::vector<GridPass>> films(size_t(k), std::vector<GridPass>(kPilotPassesPerCandidate,
-                                                                           GridPass(width, height, pilot.pixel_stride)));
+    std::vector<std::vector<GridPass>> passes(size_t(k), std::vector<GridPass>(kPilotPassesPerCandidate,
+                                                                            GridPass(width, height, pilot.pixel_stride)));
     // Each candidate's fastest pass: load from elsewhere (the image I/O process loads its
     // libraries during the pilot) and a first pass's one-off costs only ever add time, and a
     // pass lasts 5-50 ms. With the mean of the three, a slow pass of full bdpt once handed
@@ -221,13 +221,13 @@ StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene
             const Clock::time_point pass_start = Clock::now();
             const RenderedItems rendered = r->render_items(pass, 0, items);
             seconds[size_t(i)] = std::min(seconds[size_t(i)], seconds_between(pass_start, Clock::now()));
-            films[size_t(i)][size_t(round)].add(rendered);
+            passes[size_t(i)][size_t(round)].add(rendered);
             stats->add_counts(rendered.counts);
         }
 
     for (int i = 0; i < k; ++i) {
         StrategyCandidate& c = pilot.candidates[size_t(i)];
-        const std::vector<GridPass>& f = films[size_t(i)];
+        const std::vector<GridPass>& f = passes[size_t(i)];
         const GroupedVariance transport = one_sample_variance(f[0], f[1], full_per_sparse);
         const GroupedVariance whole = one_sample_variance(f[0], f[2], full_per_sparse);
         c.variance_transport = transport.mean();
