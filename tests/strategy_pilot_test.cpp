@@ -1,11 +1,13 @@
 // The strategy pilot's sparse grid (render_item_pixel with a stride and its inverse,
 // render_pixel_item; render/strategy_pilot.h),
-// without OpenCL: which pixels a sparse pass visits, and which renders get a pilot.
+// without OpenCL: which pixels a sparse pass visits, which renders get a pilot, which scenes have
+// light tracing among the candidates, and how the pilot chooses.
 #include <gtest/gtest.h>
 
 #include <set>
 
 #include "render/strategy_pilot.h"
+#include "render_test_util.h"
 #include "shared/types.h"
 
 namespace clbdpt {
@@ -64,13 +66,64 @@ TEST(SparseGrid, PlaceInTheBlockVaries) {
 // of the render's samples: a 128 x 128 film of 64 spp gets one (a coarser grid than a long
 // render's), 4 spp are too few for a 32 x 32 film or a 128 x 128 one.
 TEST(SparseGrid, WhichRendersGetAPilot) {
-    EXPECT_TRUE(strategy_pilot_fits(256, 256, 64));
-    EXPECT_TRUE(strategy_pilot_fits(128, 128, 64));
-    EXPECT_TRUE(strategy_pilot_fits(32, 32, 160));
-    EXPECT_FALSE(strategy_pilot_fits(32, 32, 4));
-    EXPECT_FALSE(strategy_pilot_fits(128, 128, 4));
-    EXPECT_FALSE(strategy_pilot_fits(64, 64, 1));
-    EXPECT_FALSE(strategy_pilot_fits(256, 256, 0));
+    EXPECT_TRUE(strategy_pilot_fits(256, 256, 64, 4));
+    EXPECT_TRUE(strategy_pilot_fits(128, 128, 64, 4));
+    EXPECT_TRUE(strategy_pilot_fits(32, 32, 160, 4));
+    EXPECT_FALSE(strategy_pilot_fits(32, 32, 4, 4));
+    EXPECT_FALSE(strategy_pilot_fits(128, 128, 4, 4));
+    EXPECT_FALSE(strategy_pilot_fits(64, 64, 1, 4));
+    EXPECT_FALSE(strategy_pilot_fits(256, 256, 0, 4));
+    // A fifth candidate (lt) costs a fifth more: 32x32 x 3 passes x 5 = 15360 samples, more
+    // than a tenth of 140 spp (14336), where four candidates' 12288 fit.
+    EXPECT_TRUE(strategy_pilot_fits(32, 32, 140, 4));
+    EXPECT_FALSE(strategy_pilot_fits(32, 32, 140, 5));
+}
+
+// Light tracing is a candidate where it renders every path and has no tails a sparse pilot
+// misses: diffuse materials only, no environment, no medium. Among the bundled scenes that is
+// the Cornell box, lamp-ceiling and point-spot; the others have a mirror or glass
+// (cornell-specular, cornell-fog), glossy plates (veach-mis), an environment (sky) or media
+// (fog-spot, smoke).
+TEST(StrategyCandidates, LightTracingWhereItSeesEverything) {
+    for (const char* name : {"cornell-box", "lamp-ceiling", "point-spot", "cornell-specular", "cornell-fog", "veach-mis",
+                             "sky", "fog-spot", "smoke"}) {
+        const std::string n = name;
+        const bool expected = n == "cornell-box" || n == "lamp-ceiling" || n == "point-spot";
+        const DeviceScene scene = build_device_scene(load_scene(test::scene_path(n)), 16, 16);
+        EXPECT_EQ(light_tracing_is_a_candidate(scene), expected) << n;
+        const std::vector<StrategyCandidate> c = strategy_candidates(light_tracing_is_a_candidate(scene));
+        ASSERT_EQ(c.size(), expected ? 5u : 4u) << n;
+        EXPECT_EQ(c.back().integrator, expected ? Integrator::Lt : Integrator::Pt) << n;
+        for (size_t i = 0; i + 1 < c.size(); ++i) EXPECT_NE(c[i].integrator, Integrator::Lt) << n;
+    }
+}
+
+// The highest efficiency wins; light tracing only where it also beats every other candidate's
+// efficiency without v_pixel (the most that stratified samples and adaptive sampling might
+// credit a camera candidate with).
+TEST(StrategyCandidates, LightTracingMustBeatTheOthersTransportAlone) {
+    std::vector<StrategyCandidate> c = strategy_candidates(true);
+    auto set = [&](size_t i, double efficiency, double transport_only) {
+        c[i].efficiency = efficiency;
+        c[i].efficiency_transport_only = transport_only;
+    };
+    set(0, 300, 310);  // full bdpt
+    set(1, 170, 175);
+    set(2, 250, 255);
+    set(3, 5, 5);  // pt
+    set(4, 480, 480);  // lt
+    EXPECT_EQ(choose_strategy_candidate(c), 4) << "lamp-ceiling: lt beats bdpt's transport alone";
+    set(3, 1400, 4800);  // pt with a large v_pixel
+    set(4, 1600, 1600);
+    EXPECT_EQ(choose_strategy_candidate(c), 3) << "Cornell box: pt's transport alone beats lt";
+    set(3, 1400, 1500);
+    EXPECT_EQ(choose_strategy_candidate(c), 4);
+    set(4, 1450, 1450);
+    EXPECT_EQ(choose_strategy_candidate(c), 3) << "lt above pt's efficiency but below its transport alone";
+    set(4, 0, 0);
+    EXPECT_EQ(choose_strategy_candidate(c), 3);
+    std::vector<StrategyCandidate> black = strategy_candidates(false);
+    EXPECT_EQ(choose_strategy_candidate(black), 0) << "a black image: full bdpt";
 }
 
 }  // namespace

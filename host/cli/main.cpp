@@ -200,7 +200,8 @@ std::string choose_strategy_mix(DeviceContext& device, const DeviceScene& ds, Re
     const int width = ds.camera.width, height = ds.camera.height;
     const bool timed = options->time_budget > 0;
     if (options->strategy_images != RenderOptions::StrategyImages::Off) return "bdpt: no pilot with --strategy-images";
-    if (timed ? options->time_budget < kPilotMinBudget : !strategy_pilot_fits(width, height, options->spp))
+    const size_t candidates = strategy_candidates(light_tracing_is_a_candidate(ds)).size();
+    if (timed ? options->time_budget < kPilotMinBudget : !strategy_pilot_fits(width, height, options->spp, candidates))
         return "bdpt: too few samples for the pilot to pay off";
     *pilot = run_strategy_pilot(device, ds, *options, timed ? 0 : options->spp, options->time_budget, pilot_stats);
     const StrategyCandidate& c = pilot->choice();
@@ -297,7 +298,7 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
     check_film_fits_in_memory(width, height, args.strategy_images.empty() ? 0 : (args.max_depth >= 0 ? args.max_depth : scene.render.max_depth));
 
     RenderOptions options;
-    // auto: bdpt whose strategy mix (or plain pt) a pilot render picks (render/strategy_pilot.h).
+    // auto: bdpt whose strategy mix (or plain pt or lt) a pilot render picks (render/strategy_pilot.h).
     const bool automatic = args.integrator == "auto";
     options.integrator = automatic ? Integrator::Bdpt : parse_integrator(args.integrator);
     const bool mix_by_hand = args.light_subpaths >= 0 || !args.connections.empty();
@@ -565,7 +566,8 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
                                            {"seconds_per_pass", c.seconds_per_pass},
                                            {"predicted_spp", c.predicted_spp},
                                            {"predicted_mse", c.predicted_mse},
-                                           {"efficiency", c.efficiency}});
+                                           {"efficiency", c.efficiency},
+                                           {"efficiency_transport_only", c.efficiency_transport_only}});
             j["strategy_pilot"] = p;
         }
         j["sampler"] = sampler_name(options.sampler);
@@ -716,8 +718,8 @@ int main(int argc, char** argv) {
     render->add_option("--height", args.height, "Film height override")->check(CLI::Range(1, 32768));
     render->add_option("--stats", args.stats, "Write a JSON summary (spp, seconds, samples/s, rays/s, ...)");
     render->add_option("--integrator", args.integrator,
-                       "auto (default: bdpt or pt, whichever strategy mix a short pilot render finds most efficient "
-                       "for the scene), bdpt (all strategies), pt (s <= 1) or lt (t = 1)")
+                       "auto (default: bdpt, pt or, in a scene of diffuse surfaces without media or environment, lt: "
+                       "whichever strategy mix a short pilot render finds most efficient for the scene), bdpt (all strategies), pt (s <= 1) or lt (t = 1)")
         ->check(CLI::IsMember({"auto", "bdpt", "pt", "lt"}));
     render->add_option("--light-subpaths", args.light_subpaths,
                        "bdpt: light subpaths traced per pixel sample, 0 to 1 (a fraction is a probability; MIS "

@@ -27,8 +27,8 @@ double seconds_between(std::chrono::steady_clock::time_point a, std::chrono::ste
 // Fewer pixels than this (or than the film has) give variance estimates too noisy to choose by.
 constexpr int kPilotMinItems = 2048;
 
-uint64_t pilot_samples_at(int width, int height, int stride) {
-    return uint64_t(render_item_count(width, height, stride)) * kPilotPassesPerCandidate * strategy_candidates().size();
+uint64_t pilot_samples_at(int width, int height, int stride, size_t candidates) {
+    return uint64_t(render_item_count(width, height, stride)) * kPilotPassesPerCandidate * candidates;
 }
 
 // The sparse grid's stride when the render's samples do not limit it: about kPilotItems pixels.
@@ -40,12 +40,12 @@ int full_pilot_stride(int width, int height) {
 // the render is short, so that the pilot stays within kPilotShare of the render's samples (a
 // 128x128 film of 64 spp gets one pixel of each 2x2 block). 0 when no grid of at least
 // kPilotMinItems pixels (or the whole film, if smaller) fits: the render then goes without.
-int pilot_stride(int width, int height, int spp) {
+int pilot_stride(int width, int height, int spp, size_t candidates) {
     const double pixels = double(width) * double(height);
     const double allowed = kPilotShare * pixels * double(std::max(spp, 0));
     const int min_items = int(std::min<double>(kPilotMinItems, pixels));
     for (int stride = full_pilot_stride(width, height); render_item_count(width, height, stride) >= min_items; ++stride)
-        if (double(pilot_samples_at(width, height, stride)) <= allowed) return stride;
+        if (double(pilot_samples_at(width, height, stride, candidates)) <= allowed) return stride;
     return 0;
 }
 
@@ -143,18 +143,30 @@ double pixel_variance(const GroupedVariance& whole, const GroupedVariance& trans
 
 }  // namespace
 
-std::vector<StrategyCandidate> strategy_candidates() {
+bool light_tracing_is_a_candidate(const DeviceScene& scene) {
+    if (!scene.media.empty()) return false;
+    for (const Material& m : scene.materials)
+        if (m.kind != MATERIAL_DIFFUSE) return false;
+    for (const Light& l : scene.lights)
+        if (l.kind == LIGHT_ENVIRONMENT) return false;
+    return true;
+}
+
+std::vector<StrategyCandidate> strategy_candidates(bool with_light_tracing) {
     // Full bdpt; half the light subpaths (they cost as much as the camera subpath but pay off
     // only where light arrives indirectly); path tracing plus light tracing (caustics seen
-    // directly, without the connections' cost); path tracing alone, with its own leaner kernel.
-    // (A quarter of the light subpaths was a candidate too; it won on none of the bundled
-    // scenes, so its pilot time is saved.)
-    std::vector<StrategyCandidate> c(4);
+    // directly, without the connections' cost); path tracing alone, with its own leaner kernel;
+    // and, where light_tracing_is_a_candidate, light tracing alone, as lean (a lamp aimed at the
+    // ceiling: 1.4x bdpt's efficiency, whose camera subpaths and connections add little there).
+    // (A quarter of the light subpaths was a candidate too; it won on none of the
+    // bundled scenes, so its pilot time is saved.)
+    std::vector<StrategyCandidate> c(with_light_tracing ? 5 : 4);
     c[0].light_subpaths = 1.0f;
     c[1].light_subpaths = 0.5f;
     c[2].light_subpaths = 1.0f;
     c[2].inner_connections = false;
     c[3].integrator = Integrator::Pt;
+    if (with_light_tracing) c[4].integrator = Integrator::Lt;
     for (StrategyCandidate& s : c) s.name = describe_strategy_mix(s.integrator, s.light_subpaths, s.inner_connections);
     return c;
 }
@@ -168,19 +180,35 @@ std::string describe_strategy_mix(Integrator integrator, float light_subpaths, b
     return buf;
 }
 
-bool strategy_pilot_fits(int width, int height, int spp) { return pilot_stride(width, height, spp) > 0; }
+int choose_strategy_candidate(const std::vector<StrategyCandidate>& candidates) {
+    double best_camera = 0;
+    for (const StrategyCandidate& c : candidates)
+        if (c.integrator != Integrator::Lt) best_camera = std::max(best_camera, c.efficiency_transport_only);
+    int chosen = 0;
+    for (int i = 0; i < int(candidates.size()); ++i) {
+        const StrategyCandidate& c = candidates[size_t(i)];
+        if (c.integrator == Integrator::Lt && c.efficiency <= best_camera) continue;
+        if (c.efficiency > candidates[size_t(chosen)].efficiency) chosen = i;
+    }
+    return chosen;
+}
+
+bool strategy_pilot_fits(int width, int height, int spp, size_t candidates) {
+    return pilot_stride(width, height, spp, candidates) > 0;
+}
 
 StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene, const RenderOptions& options,
                                  int spp, double time_budget, RenderStats* stats) {
     using Clock = std::chrono::steady_clock;
     StrategyPilot pilot;
-    pilot.candidates = strategy_candidates();
+    pilot.candidates = strategy_candidates(light_tracing_is_a_candidate(scene));
     pilot.spp = spp;
     const int k = int(pilot.candidates.size());
     const int width = scene.camera.width, height = scene.camera.height;
     // A timed render has no sample count to share: it gets the full grid (main.cpp gives it a
     // pilot only when its budget is long enough).
-    pilot.pixel_stride = spp > 0 ? std::max(1, pilot_stride(width, height, spp)) : full_pilot_stride(width, height);
+    pilot.pixel_stride = spp > 0 ? std::max(1, pilot_stride(width, height, spp, pilot.candidates.size()))
+                                    : full_pilot_stride(width, height);
     const int items = render_item_count(width, height, pilot.pixel_stride);
     const double full_per_sparse = double(width) * double(height) / items;
 
@@ -247,8 +275,10 @@ StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene
         c.predicted_mse = risky_transport / n + c.variance_pixel / std::pow(n, kPixelVarianceExponent);
         const double cost = c.predicted_mse * n * c.seconds_per_pass;
         c.efficiency = cost > 0 ? 1.0 / cost : 0.0;
-        if (c.efficiency > pilot.candidates[size_t(pilot.chosen)].efficiency) pilot.chosen = i;
+        const double transport_cost = risky_transport * c.seconds_per_pass;
+        c.efficiency_transport_only = transport_cost > 0 ? 1.0 / transport_cost : 0.0;
     }
+    pilot.chosen = choose_strategy_candidate(pilot.candidates);
     pilot.samples = uint64_t(items) * kPilotPassesPerCandidate * k;
     // The renderers' counters (build time, profile; the passes' samples and rays went to `stats`
     // above) move into `stats`, so a renderer that goes on to the main render does not count the

@@ -48,10 +48,22 @@ struct StrategyCandidate {
     double predicted_mse = 0;       // of the image at predicted_spp
     // 1 / (predicted squared error x render seconds); 0 when the image is black.
     double efficiency = 0;
+    // The same with v_pixel taken as 0: the most a camera candidate can be credited with (lt is
+    // weighed against it; see run_strategy_pilot).
+    double efficiency_transport_only = 0;
 };
 
-// What the bdpt integrator can be asked to do, in the pilot's order.
-std::vector<StrategyCandidate> strategy_candidates();
+// Whether light tracing alone (t = 1) is one of the pilot's candidates: where it renders every
+// path, and without the heavy tails that a sparse pilot cannot see. So every material is diffuse
+// (a mirror or glass next to the camera joins no light subpath; glossy surfaces seen by the
+// camera gave veach-mis 700x pt's squared error, where the pilot had measured lt's variance as
+// 0.45 +- 0.35), there is no environment (a camera ray that escapes meets no light subpath) and
+// no medium (fog-spot: a firefly of 1 680 in a 64-spp image, 125x the default's squared error).
+bool light_tracing_is_a_candidate(const DeviceScene& scene);
+
+// What the pilot can choose from, in its order: bdpt's mixes, pt, and lt where
+// light_tracing_is_a_candidate.
+std::vector<StrategyCandidate> strategy_candidates(bool with_light_tracing);
 
 // "bdpt, 0.5 light subpaths per sample, no inner connections", "pt", ...
 std::string describe_strategy_mix(Integrator integrator, float light_subpaths, bool inner_connections);
@@ -68,14 +80,23 @@ struct StrategyPilot {
     const StrategyCandidate& choice() const { return candidates[size_t(chosen)]; }
 };
 
-// Whether the pilot is worth running for a render of `spp` samples per pixel: it may cost at
-// most a tenth of the render's samples, on a sparse grid of at least 2048 pixels (or the whole
-// film, if smaller).
-bool strategy_pilot_fits(int width, int height, int spp);
+// The index of the candidate with the highest efficiency; light tracing only where its
+// efficiency also beats every other candidate's efficiency_transport_only (run_strategy_pilot).
+// Candidate 0 when every efficiency is 0 (a black image).
+int choose_strategy_candidate(const std::vector<StrategyCandidate>& candidates);
+
+// Whether the pilot of `candidates` candidates is worth running for a render of `spp` samples per
+// pixel: it may cost at most a tenth of the render's samples, on a sparse grid of at least 2048
+// pixels (or the whole film, if smaller).
+bool strategy_pilot_fits(int width, int height, int spp, size_t candidates);
 
 // Renders the pilot of every candidate on `device` (stats gain its samples, rays and build
 // time) and picks the candidate with the least predicted error x time at `spp` samples, or,
-// with time_budget > 0, the least predicted error after that many seconds.
+// with time_budget > 0, the least predicted error after that many seconds. Light tracing must
+// also beat every other candidate's efficiency_transport_only: the render's stratified samples
+// and adaptive sampling lower a camera subpath's error below the pilot's prediction (pt on the
+// Cornell box: 2.3-4.8x, mostly where v_pixel, noisy on a sparse grid, was counted), but not the
+// light image's (lt: within 7% on the Cornell box and lamp-ceiling).
 StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene, const RenderOptions& options,
                                  int spp, double time_budget, RenderStats* stats);
 
