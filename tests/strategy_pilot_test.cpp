@@ -84,7 +84,7 @@ TEST(SparseGrid, WhichRendersGetAPilot) {
 // the Cornell box, lamp-ceiling and point-spot; the others have a mirror or glass
 // (cornell-specular, cornell-fog), glossy plates (veach-mis), an environment (sky) or media
 // (fog-spot, smoke).
-TEST(StrategyCandidates, LightTracingWhereItSeesEverything) {
+TEST(StrategyCandidates, LightTracingOnlyInDiffuseScenes) {
     for (const char* name : {"cornell-box", "lamp-ceiling", "point-spot", "cornell-specular", "cornell-fog", "veach-mis",
                              "sky", "fog-spot", "smoke"}) {
         const std::string n = name;
