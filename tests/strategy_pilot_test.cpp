@@ -113,13 +113,18 @@ TEST(StrategyCandidates, LightTracingMustBeatTheOthersTransportAlone) {
     set(3, 5, 5);  // pt
     set(4, 480, 480);  // lt
     EXPECT_EQ(choose_strategy_candidate(c), 4) << "lamp-ceiling: lt beats bdpt's transport alone";
+    EXPECT_EQ(light_tracing_passed_over(c, 4), "");
     set(3, 1400, 4800);  // pt with a large v_pixel
     set(4, 1600, 1600);
     EXPECT_EQ(choose_strategy_candidate(c), 3) << "Cornell box: pt's transport alone beats lt";
+    EXPECT_EQ(light_tracing_passed_over(c, 3), "lt passed over: its efficiency 1.6e+03 does not beat pt's 4.8e+03 without v_pixel");
     set(3, 1400, 1500);
     EXPECT_EQ(choose_strategy_candidate(c), 4);
     set(4, 1450, 1450);
     EXPECT_EQ(choose_strategy_candidate(c), 3) << "lt above pt's efficiency but below its transport alone";
+    EXPECT_NE(light_tracing_passed_over(c, 3), "");
+    set(4, 1300, 1300);
+    EXPECT_EQ(light_tracing_passed_over(c, 3), "") << "lt below the chosen candidate's own efficiency";
     set(4, 0, 0);
     EXPECT_EQ(choose_strategy_candidate(c), 3);
     std::vector<StrategyCandidate> black = strategy_candidates(false);

@@ -221,7 +221,8 @@ std::string choose_strategy_mix(DeviceContext& device, const DeviceScene& ds, Re
     else
         std::snprintf(buf, sizeof buf, "chosen by a pilot of %.2f s (%.0f%% of the render's samples)", pilot->seconds,
                       100.0 * double(pilot->samples) / (double(width) * height * std::max(options->spp, 1)));
-    return buf;
+    const std::string passed_over = light_tracing_passed_over(pilot->candidates, pilot->chosen);
+    return passed_over.empty() ? std::string(buf) : std::string(buf) + "; " + passed_over;
 }
 
 // The settings besides the scene that change the image, as one line of key=value pairs: a

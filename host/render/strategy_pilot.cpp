@@ -193,6 +193,20 @@ int choose_strategy_candidate(const std::vector<StrategyCandidate>& candidates) 
     return chosen;
 }
 
+std::string light_tracing_passed_over(const std::vector<StrategyCandidate>& candidates, int chosen) {
+    const StrategyCandidate* lt = nullptr;
+    const StrategyCandidate* rival = nullptr;
+    for (const StrategyCandidate& c : candidates) {
+        if (c.integrator == Integrator::Lt) lt = &c;
+        else if (!rival || c.efficiency_transport_only > rival->efficiency_transport_only) rival = &c;
+    }
+    if (!lt || !rival || lt->efficiency <= candidates[size_t(chosen)].efficiency) return "";
+    char buf[256];
+    std::snprintf(buf, sizeof buf, "lt passed over: its efficiency %.3g does not beat %s's %.3g without v_pixel",
+                  lt->efficiency, rival->name.c_str(), rival->efficiency_transport_only);
+    return buf;
+}
+
 bool strategy_pilot_fits(int width, int height, int spp, size_t candidates) {
     return pilot_stride(width, height, spp, candidates) > 0;
 }

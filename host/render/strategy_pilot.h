@@ -85,6 +85,10 @@ struct StrategyPilot {
 // Candidate 0 when every efficiency is 0 (a black image).
 int choose_strategy_candidate(const std::vector<StrategyCandidate>& candidates);
 
+// Where light tracing had the highest efficiency but was not chosen (choose_strategy_candidate):
+// one line saying so, with the efficiency it did not beat; else "".
+std::string light_tracing_passed_over(const std::vector<StrategyCandidate>& candidates, int chosen);
+
 // Whether the pilot of `candidates` candidates is worth running for a render of `spp` samples per
 // pixel: it may cost at most a tenth of the render's samples, on a sparse grid of at least 2048
 // pixels (or the whole film, if smaller).
