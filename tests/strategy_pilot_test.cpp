@@ -117,7 +117,8 @@ TEST(StrategyCandidates, LightTracingMustBeatTheOthersTransportAlone) {
     set(3, 1400, 4800);  // pt with a large v_pixel
     set(4, 1600, 1600);
     EXPECT_EQ(choose_strategy_candidate(c), 3) << "Cornell box: pt's transport alone beats lt";
-    EXPECT_EQ(light_tracing_passed_over(c, 3), "lt passed over: its efficiency 1.6e+03 does not beat pt's 4.8e+03 without v_pixel");
+    EXPECT_EQ(light_tracing_passed_over(c, 3),
+              "lt passed over: its efficiency 1.6e+03 does not beat pt's 4.8e+03 without v_pixel");
     set(3, 1400, 1500);
     EXPECT_EQ(choose_strategy_candidate(c), 4);
     set(4, 1450, 1450);

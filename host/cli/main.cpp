@@ -720,7 +720,8 @@ int main(int argc, char** argv) {
     render->add_option("--stats", args.stats, "Write a JSON summary (spp, seconds, samples/s, rays/s, ...)");
     render->add_option("--integrator", args.integrator,
                        "auto (default: bdpt, pt or, in a scene of diffuse surfaces without media or environment, lt: "
-                       "whichever strategy mix a short pilot render finds most efficient for the scene), bdpt (all strategies), pt (s <= 1) or lt (t = 1)")
+                       "whichever strategy mix a short pilot render finds most efficient for the scene), bdpt (all "
+                       "strategies), pt (s <= 1) or lt (t = 1)")
         ->check(CLI::IsMember({"auto", "bdpt", "pt", "lt"}));
     render->add_option("--light-subpaths", args.light_subpaths,
                        "bdpt: light subpaths traced per pixel sample, 0 to 1 (a fraction is a probability; MIS "

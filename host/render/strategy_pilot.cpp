@@ -158,8 +158,8 @@ std::vector<StrategyCandidate> strategy_candidates(bool with_light_tracing) {
     // directly, without the connections' cost); path tracing alone, with its own leaner kernel;
     // and, where light_tracing_is_a_candidate, light tracing alone, as lean (a lamp aimed at the
     // ceiling: 1.4x bdpt's efficiency, whose camera subpaths and connections add little there).
-    // (A quarter of the light subpaths was a candidate too; it won on none of the
-    // bundled scenes, so its pilot time is saved.)
+    // (A quarter of the light subpaths was a candidate too; it won on none of the bundled
+    // scenes, so its pilot time is saved.)
     std::vector<StrategyCandidate> c(with_light_tracing ? 5 : 4);
     c[0].light_subpaths = 1.0f;
     c[1].light_subpaths = 0.5f;
