@@ -141,6 +141,15 @@ double pixel_variance(const GroupedVariance& whole, const GroupedVariance& trans
     return std::max(0.0, 0.5 * (d[kVarianceGroups / 2 - 1] + d[kVarianceGroups / 2]));
 }
 
+// The candidate other than lt with the highest efficiency_transport_only: the figure lt must beat.
+const StrategyCandidate* lt_rival(const std::vector<StrategyCandidate>& candidates) {
+    const StrategyCandidate* rival = nullptr;
+    for (const StrategyCandidate& c : candidates)
+        if (c.integrator != Integrator::Lt && (!rival || c.efficiency_transport_only > rival->efficiency_transport_only))
+            rival = &c;
+    return rival;
+}
+
 }  // namespace
 
 bool light_tracing_is_a_candidate(const DeviceScene& scene) {
@@ -181,13 +190,12 @@ std::string describe_strategy_mix(Integrator integrator, float light_subpaths, b
 }
 
 int choose_strategy_candidate(const std::vector<StrategyCandidate>& candidates) {
-    double best_camera = 0;
-    for (const StrategyCandidate& c : candidates)
-        if (c.integrator != Integrator::Lt) best_camera = std::max(best_camera, c.efficiency_transport_only);
+    const StrategyCandidate* rival = lt_rival(candidates);
+    const double bar = rival ? rival->efficiency_transport_only : 0.0;
     int chosen = 0;
     for (int i = 0; i < int(candidates.size()); ++i) {
         const StrategyCandidate& c = candidates[size_t(i)];
-        if (c.integrator == Integrator::Lt && c.efficiency <= best_camera) continue;
+        if (c.integrator == Integrator::Lt && c.efficiency <= bar) continue;
         if (c.efficiency > candidates[size_t(chosen)].efficiency) chosen = i;
     }
     return chosen;
@@ -195,11 +203,9 @@ int choose_strategy_candidate(const std::vector<StrategyCandidate>& candidates) 
 
 std::string light_tracing_passed_over(const std::vector<StrategyCandidate>& candidates, int chosen) {
     const StrategyCandidate* lt = nullptr;
-    const StrategyCandidate* rival = nullptr;
-    for (const StrategyCandidate& c : candidates) {
+    for (const StrategyCandidate& c : candidates)
         if (c.integrator == Integrator::Lt) lt = &c;
-        else if (!rival || c.efficiency_transport_only > rival->efficiency_transport_only) rival = &c;
-    }
+    const StrategyCandidate* rival = lt_rival(candidates);
     if (!lt || !rival || lt->efficiency <= candidates[size_t(chosen)].efficiency) return "";
     char buf[256];
     std::snprintf(buf, sizeof buf, "lt passed over: its efficiency %.3g does not beat %s's %.3g without v_pixel",

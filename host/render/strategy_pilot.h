@@ -1,7 +1,8 @@
 // Efficiency-aware BDPT (Grittmann, Yazici, Georgiev & Slusallek 2022): a short pilot render
 // decides, per scene, how many light subpaths a pixel sample traces and which connections it
-// makes (or plain path tracing, or plain light tracing), by estimated variance times cost. The default `clbdpt render` (--integrator auto)
-// runs it; --integrator bdpt|pt|lt and --light-subpaths / --connections fix the choice by hand.
+// makes (or plain path tracing, or plain light tracing), by estimated variance times cost. The
+// default `clbdpt render` (--integrator auto) runs it; --integrator bdpt|pt|lt and
+// --light-subpaths / --connections fix the choice by hand.
 //
 // The pilot renders a sparse grid of pixels (one of each k x k block, about 8192 of them, fewer
 // for a short render) three times per candidate, on the first device, and throws the passes
