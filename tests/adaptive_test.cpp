@@ -87,5 +87,29 @@ TEST(AdaptivePlan, ExtraSamplesStayWithinTheirShare) {
     for (uint8_t t : none.tier) EXPECT_EQ(t, 0);
 }
 
+// A pixel with extra samples: with the passes' integrator's (a bdpt camera image's), its camera
+// sum is divided by all its samples and its light image by spp; with path-traced ones (whole
+// estimates of the pixel), camera and light sums together are divided by all its samples.
+TEST(AdaptiveFilm, ExtraSamplesCameraOnlyOrWhole) {
+    Film film(2, 1);
+    film.spp = 4;
+    for (int c = 0; c < 3; ++c) {
+        film.camera_sum[size_t(c)] = 2.0 + c;   // pixel 0: 4 passes + 12 extra samples
+        film.light_sum[size_t(c)] = 1.0;
+        film.camera_sum[size_t(3 + c)] = 4.0;  // pixel 1: none
+        film.light_sum[size_t(3 + c)] = 2.0;
+    }
+    film.extra_samples = {12, 0};
+    std::vector<float> img = film.image();
+    EXPECT_FLOAT_EQ(img[0], 2.0f / 16 + 1.0f / 4);
+    EXPECT_FLOAT_EQ(img[2], 4.0f / 16 + 1.0f / 4);
+    EXPECT_FLOAT_EQ(img[3], 6.0f / 4);
+    film.extra_samples_whole = true;
+    img = film.image();
+    EXPECT_FLOAT_EQ(img[0], 3.0f / 16);
+    EXPECT_FLOAT_EQ(img[2], 5.0f / 16);
+    EXPECT_FLOAT_EQ(img[3], 6.0f / 4);
+}
+
 }  // namespace
 }  // namespace clbdpt

@@ -443,7 +443,9 @@ TEST_F(CliTest, AdaptiveSamplingRefinesSomePixelsAndLeavesTheRest) {
     EXPECT_GE(extra, refined * 16u);
     EXPECT_EQ(j_on["samples"].get<uint64_t>(), j_off["samples"].get<uint64_t>() + extra);
     EXPECT_FALSE(j_off["adaptive"]["enabled"].get<bool>());
+    EXPECT_EQ(j_on["adaptive"]["integrator"], "pt");
     EXPECT_NE(on.output.find("adaptive sampling"), std::string::npos) << on.output;
+    EXPECT_EQ(on.output.find("path-traced"), std::string::npos) << "a pt render's own extra samples";
 
     int w = 0, h = 0;
     const std::vector<float> a = clbdpt::read_image_rgb(out("on.exr"), &w, &h);

@@ -132,5 +132,27 @@ TEST(StrategyCandidates, LightTracingMustBeatTheOthersTransportAlone) {
     EXPECT_EQ(choose_strategy_candidate(black), 0) << "a black image: full bdpt";
 }
 
+// Adaptive sampling's extra samples are path-traced only for a chosen bdpt mix, without the (1,1)
+// strategy, and where pt's efficiency is at least kPathTracedExtrasMinShare of the mix's.
+TEST(StrategyCandidates, PathTracedExtraSamplesWherePtIsClose) {
+    std::vector<StrategyCandidate> c = strategy_candidates(false);
+    for (size_t i = 0; i < c.size(); ++i) c[i].efficiency = 100;
+    c[2].efficiency = 120;  // bdpt without inner connections, chosen
+    c[3].efficiency = 0.85 * 120;  // pt (veach-mis, seed 1)
+    ASSERT_EQ(c[3].integrator, Integrator::Pt);
+    ASSERT_EQ(choose_strategy_candidate(c), 2);
+    EXPECT_TRUE(path_traced_extra_samples(c, 2, false));
+    EXPECT_FALSE(path_traced_extra_samples(c, 2, true)) << "a thin lens or media: (1,1) carries what pt misses";
+    c[3].efficiency = kPathTracedExtrasMinShare * 120;
+    EXPECT_TRUE(path_traced_extra_samples(c, 2, false));
+    c[3].efficiency = 0.99 * kPathTracedExtrasMinShare * 120;
+    EXPECT_FALSE(path_traced_extra_samples(c, 2, false)) << "pt too far behind the mix";
+    c[3].efficiency = 200;
+    EXPECT_FALSE(path_traced_extra_samples(c, 3, false)) << "pt chosen: its own extra samples";
+    std::vector<StrategyCandidate> with_lt = strategy_candidates(true);
+    for (StrategyCandidate& x : with_lt) x.efficiency = 100;
+    EXPECT_FALSE(path_traced_extra_samples(with_lt, 4, false)) << "lt chosen: it has no camera image to refine";
+}
+
 }  // namespace
 }  // namespace clbdpt

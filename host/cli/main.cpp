@@ -501,16 +501,25 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
     }
     AdaptivePlan adaptive_plan;
     double adaptive_seconds = 0;
+    Integrator adaptive_integrator = options.integrator;  // of the extra samples
     if (adaptive && interrupted_by == 0) {
         const auto adaptive_start = Clock::now();
         adaptive_plan = plan_adaptive_samples(film);
-        render_adaptive_samples(*renderer_list.front(), adaptive_plan, film, &st,
+        // The pilot's path tracer takes them where it renders about as well as the chosen mix
+        // (render/strategy_pilot.h).
+        Renderer* extra_renderer = renderer_list.front();
+        if (run_pilot && path_traced_extra_samples(pilot.candidates, pilot.chosen, uses_light_to_lens(ds)))
+            for (auto& r : pilot.renderers)
+                if (r && r->options().integrator == Integrator::Pt) extra_renderer = r.get();
+        adaptive_integrator = extra_renderer->options().integrator;
+        render_adaptive_samples(*extra_renderer, adaptive_plan, film, &st,
                                 [] { return interrupt_signal() != 0; });
         adaptive_seconds = seconds_since(adaptive_start);
         st.seconds += adaptive_seconds;
         // The renderers' profiles (--profile) now hold the extra samples' launches too.
         st.profile = RenderProfile();
         for (Renderer* r : renderer_list) st.profile.add(r->stats().profile);
+        if (extra_renderer != renderer_list.front()) st.profile.add(extra_renderer->stats().profile);
     }
     if (run_pilot) {
         st.add(pilot_stats);
@@ -530,6 +539,8 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
     meta.strings.push_back({"clbdpt:spp", std::to_string(film.spp)});
     if (adaptive)
         meta.strings.push_back({"clbdpt:adaptive_extra_samples", std::to_string(adaptive_plan.extra_samples)});
+    if (adaptive && adaptive_integrator != options.integrator)
+        meta.strings.push_back({"clbdpt:adaptive_extra_samples_by", integrator_name(adaptive_integrator)});
     meta.strings.push_back({"clbdpt:max_depth", std::to_string(options.max_depth)});
     meta.strings.push_back({"clbdpt:seed", std::to_string(options.seed)});
     meta.strings.push_back({"clbdpt:seconds", std::to_string(st.seconds)});
@@ -580,6 +591,7 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
             a["max_tier"] = adaptive_plan.max_tier;
             a["u_mean"] = adaptive_plan.u_mean;
             a["seconds"] = adaptive_seconds;
+            a["integrator"] = integrator_name(adaptive_integrator);
         }
         j["adaptive"] = a;
         j["width"] = width;
@@ -656,8 +668,9 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
                      st.program_from_cache ? "cached" : "build", st.build_seconds, output.c_str());
         if (!mix_note.empty()) std::fprintf(stderr, "clbdpt: strategy mix %s\n", mix_note.c_str());
         if (adaptive_plan.extra_samples > 0)
-            std::fprintf(stderr, "clbdpt: adaptive sampling: %.1f%% more samples, in %llu pixels (%.2f s)\n",
+            std::fprintf(stderr, "clbdpt: adaptive sampling: %.1f%% more samples%s, in %llu pixels (%.2f s)\n",
                          100.0 * double(adaptive_plan.extra_samples) / (double(film.spp) * width * height),
+                         adaptive_integrator != options.integrator ? " (path-traced: whole pixel estimates)" : "",
                          (unsigned long long)adaptive_plan.pixels_refined, adaptive_seconds);
         if (st.device_shares.size() > 1)
             for (const RenderStats::DeviceShare& d : st.device_shares)

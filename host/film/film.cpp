@@ -28,7 +28,10 @@ std::vector<float> Film::image() const {
     }
     for (size_t i = 0; i < out.size(); ++i) {
         const double camera_samples = double(spp) + double(extra_samples[i / 3]);
-        out[i] = float((camera_samples > 0 ? camera_sum[i] / camera_samples : 0.0) + light_sum[i] * inv);
+        if (extra_samples_whole)
+            out[i] = float(camera_samples > 0 ? (camera_sum[i] + light_sum[i]) / camera_samples : 0.0);
+        else
+            out[i] = float((camera_samples > 0 ? camera_sum[i] / camera_samples : 0.0) + light_sum[i] * inv);
     }
     return out;
 }

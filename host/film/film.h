@@ -3,7 +3,8 @@
 //   image = (camera_sum + light_sum) / spp
 // camera_sum gathers each pixel's own camera subpaths, light_sum the t = 1 splats that light
 // subpaths leave on any pixel. A pass adds one sample of every pixel and one to spp. Pixels that
-// adaptive sampling gave extra camera samples divide their camera_sum by spp + their extra.
+// adaptive sampling gave extra camera samples divide their camera_sum by spp + their extra, or,
+// where those samples were whole estimates of the pixel (path-traced), camera_sum + light_sum.
 #pragma once
 
 #include <cstddef>
@@ -27,6 +28,10 @@ struct Film {
     // added to camera_sum (empty: none); the light image keeps spp samples per pixel.
     std::vector<double> camera_sq;
     std::vector<uint32_t> extra_samples;
+    // Whether the extra samples are whole estimates of their pixel (a path tracer's, in a bdpt
+    // render): the pixel is then the mean of its spp samples (camera_sum and light_sum) and its
+    // extra ones alike, (camera_sum + light_sum) / (spp + extra).
+    bool extra_samples_whole = false;
 
     Film() = default;
     Film(int w, int h) : width(w), height(h), camera_sum(size_t(w) * h * 3), light_sum(size_t(w) * h * 3) {}

@@ -90,6 +90,7 @@ void render_adaptive_samples(Renderer& renderer, const AdaptivePlan& plan, Film&
     if (plan.extra_samples == 0) return;
     if (plan.tier.size() != pixels || plan.spp != film.spp) throw Error("adaptive sampling: plan does not fit the film");
     film.extra_samples.assign(pixels, 0);
+    film.extra_samples_whole = renderer.options().integrator == Integrator::Pt;
     const uint32_t seed = renderer.options().seed;
     // Tier k's pixels get samples spp 2^(k-1) .. spp 2^k - 1: rendered for every pixel of tier
     // k or more, a run of neighbouring such pixels at a time, in pixel order (so the image does

@@ -19,7 +19,10 @@
 // The extra samples of pixel p are its samples spp .. n_p - 1, so they continue its Sobol
 // sequence. They add to the camera image only: a bdpt sample's light-image splats (t = 1) are
 // left out, so the light image keeps spp samples per pixel and each strategy's estimate its
-// own count (the MIS weights of a path still sum to one, so the sum stays unbiased).
+// own count (the MIS weights of a path still sum to one, so the sum stays unbiased). Extra
+// samples rendered by the path tracer are whole estimates of the pixel instead: the pixel is
+// then the mean of all its samples, its passes' light image counted as theirs (the default does
+// this for a bdpt mix where the pilot found pt close, render/strategy_pilot.h).
 #pragma once
 
 #include <cstdint>
@@ -46,8 +49,9 @@ struct AdaptivePlan {
 // The plan for a film of spp samples per pixel with camera_sq kept.
 AdaptivePlan plan_adaptive_samples(const Film& film, int max_tier = 4, double max_extra_share = 1.0);
 
-// Renders the plan's extra samples with `renderer` (whose options give the seed) and adds them
-// to the film's camera sums and extra_samples; stats gain their samples and rays. `stop`, polled
+// Renders the plan's extra samples with `renderer` (whose options give the seed; the passes' own
+// or the path tracer) and adds them to the film's camera sums and extra_samples (setting
+// extra_samples_whole for the path tracer's); stats gain their samples and rays. `stop`, polled
 // between launches, ends it early (Ctrl-C): the samples added so far stay, each pixel's count
 // with them, and since when it stops does not depend on any pixel's samples the image stays
 // unbiased.

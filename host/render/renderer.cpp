@@ -154,9 +154,11 @@ RenderParams Renderer::batch_params(const PassSpec& pass, int first_item, int it
     const bool bdpt = options_.integrator == Integrator::Bdpt;
     params.light_subpaths = bdpt ? options_.light_subpaths : 1.0f;
     params.inner_connections = bdpt ? (options_.inner_connections ? 1 : 0) : 1;
-    params.light_to_lens = scene_.camera.lens_radius > 0 || !scene_.media.empty() ? 1 : 0;
+    params.light_to_lens = uses_light_to_lens(scene_) ? 1 : 0;
     return params;
 }
+
+bool uses_light_to_lens(const DeviceScene& scene) { return scene.camera.lens_radius > 0 || !scene.media.empty(); }
 
 Error Renderer::rendering_failure(const cl::Error& e) const {
     return Error(std::string("OpenCL: ") + e.what() + ": " + cl_error_name(e.err()) + " while rendering on " +

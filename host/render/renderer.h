@@ -131,6 +131,10 @@ struct PassSpec {
     int run_length = 0;
 };
 
+// Whether bdpt uses the (1,1) strategy, a light point joined straight to the lens, in `scene`:
+// with a thin lens or media (cl/strategies.h).
+bool uses_light_to_lens(const DeviceScene& scene);
+
 class Renderer {
 public:
     // buffers: the scene already uploaded to this device by another renderer (shared, so a

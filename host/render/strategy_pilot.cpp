@@ -213,6 +213,14 @@ std::string light_tracing_passed_over(const std::vector<StrategyCandidate>& cand
     return buf;
 }
 
+bool path_traced_extra_samples(const std::vector<StrategyCandidate>& candidates, int chosen, bool light_to_lens) {
+    const StrategyCandidate& c = candidates[size_t(chosen)];
+    if (c.integrator != Integrator::Bdpt || light_to_lens) return false;
+    for (const StrategyCandidate& pt : candidates)
+        if (pt.integrator == Integrator::Pt) return pt.efficiency >= kPathTracedExtrasMinShare * c.efficiency;
+    return false;
+}
+
 bool strategy_pilot_fits(int width, int height, int spp, size_t candidates) {
     return pilot_stride(width, height, spp, candidates) > 0;
 }
