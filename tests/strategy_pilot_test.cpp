@@ -79,6 +79,22 @@ TEST(SparseGrid, WhichRendersGetAPilot) {
     EXPECT_FALSE(strategy_pilot_fits(32, 32, 140, 5));
 }
 
+// A timed render's grid follows its budget: the full grid (about 8192 pixels) from 10 s on, down
+// to 2048 pixels or the whole film for short budgets.
+TEST(SparseGrid, TimedPilotGridFollowsTheBudget) {
+    EXPECT_EQ(timed_pilot_stride(256, 256, 10.0), 3);
+    EXPECT_EQ(timed_pilot_stride(256, 256, 60.0), 3);
+    for (double budget : {1.0, 1.5, 3.0, 5.0}) {
+        const int items = render_item_count(256, 256, timed_pilot_stride(256, 256, budget));
+        EXPECT_GE(items, std::max(2048, int(8192 * budget / 10.0))) << budget;
+        EXPECT_LT(items, 8192 * budget / 10.0 * 1.6 + 2048) << budget;
+    }
+    EXPECT_LT(render_item_count(256, 256, timed_pilot_stride(256, 256, 1.5)),
+              render_item_count(256, 256, timed_pilot_stride(256, 256, 10.0)));
+    EXPECT_EQ(timed_pilot_stride(128, 128, 1.5), 2);  // 4096 pixels where the whole film was the grid
+    EXPECT_EQ(timed_pilot_stride(32, 32, 1.5), 1);    // a film smaller than 2048 pixels: all of it
+}
+
 // Light tracing is a candidate where it renders every path and has no tails a sparse pilot
 // misses: diffuse materials only, no environment, no medium. Among the bundled scenes that is
 // the Cornell box, lamp-ceiling and point-spot; the others have a mirror or glass

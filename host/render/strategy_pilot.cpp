@@ -49,6 +49,23 @@ int pilot_stride(int width, int height, int spp, size_t candidates) {
     return 0;
 }
 
+// A time budget of at least this many seconds gets the full grid; a shorter one a grid of
+// proportionally fewer pixels, down to kPilotMinItems (or the whole film), so that a short
+// budget is not mostly pilot (a 128x128 Cornell box in 1.5 s: the whole film as grid took 0.38 s).
+constexpr double kFullGridBudgetSeconds = 10.0;
+
+}  // namespace
+
+int timed_pilot_stride(int width, int height, double time_budget) {
+    const double share = std::min(1.0, time_budget / kFullGridBudgetSeconds);
+    const int target = std::max(kPilotMinItems, int(kPilotItems * share));
+    int stride = full_pilot_stride(width, height);
+    while (render_item_count(width, height, stride + 1) >= std::min(target, width * height)) ++stride;
+    return stride;
+}
+
+namespace {
+
 // The sparse grid's values of one pilot pass: per grid pixel (the pass's work item), the camera
 // sample's rgb and the light image's rgb there. The grid alone is kept, so the pilot's memory
 // and time do not grow with the film: with a full film per pass (twelve), a 2048^2 render's
@@ -233,10 +250,10 @@ StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene
     pilot.spp = spp;
     const int k = int(pilot.candidates.size());
     const int width = scene.camera.width, height = scene.camera.height;
-    // A timed render has no sample count to share: it gets the full grid (main.cpp gives it a
-    // pilot only when its budget is long enough).
+    // A timed render has no sample count to share: its grid follows its budget (main.cpp gives
+    // it a pilot only when the budget is long enough).
     pilot.pixel_stride = spp > 0 ? std::max(1, pilot_stride(width, height, spp, pilot.candidates.size()))
-                                    : full_pilot_stride(width, height);
+                                    : timed_pilot_stride(width, height, time_budget);
     const int items = render_item_count(width, height, pilot.pixel_stride);
     const double full_per_sparse = double(width) * double(height) / items;
 

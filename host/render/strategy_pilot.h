@@ -95,6 +95,10 @@ std::string light_tracing_passed_over(const std::vector<StrategyCandidate>& cand
 // pixels (or the whole film, if smaller).
 bool strategy_pilot_fits(int width, int height, int spp, size_t candidates);
 
+// The sparse grid's stride for a render of `time_budget` seconds: the full grid (about 8192
+// pixels) from 10 s on, proportionally fewer pixels for less, down to 2048 (or the whole film).
+int timed_pilot_stride(int width, int height, double time_budget);
+
 // Whether adaptive sampling's extra samples (render/adaptive.h) of a render with the pilot's
 // choice are better taken by the path tracer than by the chosen bdpt mix: the extra samples
 // refine the camera image only, so where a mix carries a highlight in its light image (t = 1),
