@@ -756,8 +756,8 @@ int main(int argc, char** argv) {
     render->add_option("--adaptive", args.adaptive,
                        "on (default): after the spp passes, up to 16x the samples for the pixels whose neighbours are "
                        "noisiest (at most as many extra samples as the passes had; sobol and independent samplers, "
-                       "--spp 8 or more, one process, no --time, --checkpoint or --resume); off: spp samples for "
-                       "every pixel")
+                       "--spp 8 or more, one process, no --time, --checkpoint or --resume; path-traced where the "
+                       "pilot chose a BDPT mix and found pt close); off: spp samples for every pixel")
         ->check(CLI::IsMember({"on", "off"}));
     render->add_option("--aov", args.aov, "Debug render of the first hit: normal, albedo or depth")
         ->check(CLI::IsMember({"normal", "albedo", "depth"}));
