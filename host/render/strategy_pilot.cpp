@@ -54,18 +54,6 @@ int pilot_stride(int width, int height, int spp, size_t candidates) {
 // budget is not mostly pilot (a 128x128 Cornell box in 1.5 s: the whole film as grid took 0.38 s).
 constexpr double kFullGridBudgetSeconds = 10.0;
 
-}  // namespace
-
-int timed_pilot_stride(int width, int height, double time_budget) {
-    const double share = std::min(1.0, time_budget / kFullGridBudgetSeconds);
-    const int target = std::max(kPilotMinItems, int(kPilotItems * share));
-    int stride = full_pilot_stride(width, height);
-    while (render_item_count(width, height, stride + 1) >= std::min(target, width * height)) ++stride;
-    return stride;
-}
-
-namespace {
-
 // The sparse grid's values of one pilot pass: per grid pixel (the pass's work item), the camera
 // sample's rgb and the light image's rgb there. The grid alone is kept, so the pilot's memory
 // and time do not grow with the film: with a full film per pass (twelve), a 2048^2 render's
@@ -240,6 +228,14 @@ bool path_traced_extra_samples(const std::vector<StrategyCandidate>& candidates,
 
 bool strategy_pilot_fits(int width, int height, int spp, size_t candidates) {
     return pilot_stride(width, height, spp, candidates) > 0;
+}
+
+int timed_pilot_stride(int width, int height, double time_budget) {
+    const double share = std::min(1.0, time_budget / kFullGridBudgetSeconds);
+    const int target = std::max(kPilotMinItems, int(kPilotItems * share));
+    int stride = full_pilot_stride(width, height);
+    while (render_item_count(width, height, stride + 1) >= std::min(target, width * height)) ++stride;
+    return stride;
 }
 
 StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene, const RenderOptions& options,
