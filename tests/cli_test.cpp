@@ -313,7 +313,7 @@ TEST_F(CliTest, FailingDeviceLosesNothing) {
 // to pay off, reports what it measured and renders with the candidate it predicts best; short
 // renders use plain bdpt; --light-subpaths / --connections fix the mix by hand.
 TEST_F(CliTest, AutoChoosesTheStrategyMixByPilot) {
-    const std::string scene = " " + std::string(CLBDPT_SCENES_DIR) + "/lamp-ceiling/lamp-ceiling.json --width 32 --height 32";
+    const std::string scene = " " + std::string(CLBDPT_SCENES_DIR) + "/lamp-ceiling/lamp-ceiling.json --width 64 --height 64";
     CommandResult r = run("render" + scene + " --spp 160 -o " + out("auto.exr") + " --stats " + out("auto.json"));
     ASSERT_EQ(r.status, 0) << r.output;
     std::ifstream in(out("auto.json"));

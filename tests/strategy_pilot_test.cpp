@@ -62,37 +62,40 @@ TEST(SparseGrid, PlaceInTheBlockVaries) {
     }
 }
 
-// The pilot runs when a grid of at least 2048 pixels (or the whole film) costs at most a tenth
-// of the render's samples: a 128 x 128 film of 64 spp gets one (a coarser grid than a long
-// render's), 4 spp are too few for a 32 x 32 film or a 128 x 128 one.
+// The pilot runs when a grid of at least 1024 pixels (or the whole film) costs at most a tenth
+// of the render's samples, at 9 passes per candidate: a 128 x 128 film of 64 spp gets one (a
+// coarser grid than a long render's), 4 spp are too few for a 128 x 128 film, and a 32 x 32 film
+// (all of it the grid) needs 360 spp.
 TEST(SparseGrid, WhichRendersGetAPilot) {
     EXPECT_TRUE(strategy_pilot_fits(256, 256, 64, 4));
+    EXPECT_TRUE(strategy_pilot_fits(256, 256, 8, 4));
     EXPECT_TRUE(strategy_pilot_fits(128, 128, 64, 4));
-    EXPECT_TRUE(strategy_pilot_fits(32, 32, 160, 4));
+    EXPECT_TRUE(strategy_pilot_fits(32, 32, 360, 4));
+    EXPECT_FALSE(strategy_pilot_fits(32, 32, 160, 4));
     EXPECT_FALSE(strategy_pilot_fits(32, 32, 4, 4));
     EXPECT_FALSE(strategy_pilot_fits(128, 128, 4, 4));
     EXPECT_FALSE(strategy_pilot_fits(64, 64, 1, 4));
     EXPECT_FALSE(strategy_pilot_fits(256, 256, 0, 4));
-    // A fifth candidate (lt) costs a fifth more: 32x32 x 3 passes x 5 = 15360 samples, more
-    // than a tenth of 140 spp (14336), where four candidates' 12288 fit.
-    EXPECT_TRUE(strategy_pilot_fits(32, 32, 140, 4));
-    EXPECT_FALSE(strategy_pilot_fits(32, 32, 140, 5));
+    // A fifth candidate (lt) costs a fifth more: 32x32 x 9 passes x 5 = 46080 samples, more
+    // than a tenth of 400 spp (40960), where four candidates' 36864 fit.
+    EXPECT_TRUE(strategy_pilot_fits(32, 32, 400, 4));
+    EXPECT_FALSE(strategy_pilot_fits(32, 32, 400, 5));
 }
 
-// A timed render's grid follows its budget: the full grid (about 8192 pixels) from 10 s on, down
-// to 2048 pixels or the whole film for short budgets.
+// A timed render's grid follows its budget: the full grid (about 3072 pixels) from 10 s on, down
+// to 1024 pixels or the whole film for short budgets.
 TEST(SparseGrid, TimedPilotGridFollowsTheBudget) {
-    EXPECT_EQ(timed_pilot_stride(256, 256, 10.0), 3);
-    EXPECT_EQ(timed_pilot_stride(256, 256, 60.0), 3);
+    EXPECT_EQ(timed_pilot_stride(256, 256, 10.0), 5);
+    EXPECT_EQ(timed_pilot_stride(256, 256, 60.0), 5);
     for (double budget : {1.0, 1.5, 3.0, 5.0}) {
         const int items = render_item_count(256, 256, timed_pilot_stride(256, 256, budget));
-        EXPECT_GE(items, std::max(2048, int(8192 * budget / 10.0))) << budget;
-        EXPECT_LT(items, 8192 * budget / 10.0 * 1.6 + 2048) << budget;
+        EXPECT_GE(items, std::max(1024, int(3072 * budget / 10.0))) << budget;
+        EXPECT_LT(items, 3072 * budget / 10.0 * 1.6 + 1024) << budget;
     }
     EXPECT_LT(render_item_count(256, 256, timed_pilot_stride(256, 256, 1.5)),
               render_item_count(256, 256, timed_pilot_stride(256, 256, 10.0)));
-    EXPECT_EQ(timed_pilot_stride(128, 128, 1.5), 2);  // 4096 pixels where the whole film was the grid
-    EXPECT_EQ(timed_pilot_stride(32, 32, 1.5), 1);    // a film smaller than 2048 pixels: all of it
+    EXPECT_EQ(timed_pilot_stride(128, 128, 1.5), 4);  // 1024 pixels where the whole film was the grid
+    EXPECT_EQ(timed_pilot_stride(32, 32, 1.5), 1);    // a film of 1024 pixels: all of it
 }
 
 // Light tracing is a candidate where it renders every path and has no tails a sparse pilot
@@ -168,6 +171,40 @@ TEST(StrategyCandidates, PathTracedExtraSamplesWherePtIsClose) {
     std::vector<StrategyCandidate> with_lt = strategy_candidates(true);
     for (StrategyCandidate& x : with_lt) x.efficiency = 100;
     EXPECT_FALSE(path_traced_extra_samples(with_lt, 4, false)) << "lt chosen: it has no camera image to refine";
+}
+
+// The same large sample in every camera candidate is left out of the prediction; a candidate's
+// own large samples, and shared terms below the largest 1% of pixels, stay.
+TEST(StrategyCandidates, SharedTailIsWhatEveryCameraCandidateHasAlike) {
+    const size_t items = 1000;
+    std::vector<double> pt(items, 0.01), bdpt(items, 0.02), mix(items, 0.015);
+    for (size_t i = 0; i < items; ++i) pt[i] = bdpt[i] = mix[i] = 0.01 + 1e-5 * double(i % 7);  // alike, small
+    pt[10] = 60.0, bdpt[10] = 60.2, mix[10] = 59.9;  // one path, sampled alike by all three
+    pt[20] = 24.0, bdpt[20] = 24.0, mix[20] = 24.0;
+    pt[30] = 50.0;                                   // pt's own firefly
+    pt[40] = 9.0, bdpt[40] = 12.0, mix[40] = 9.0;    // large in all, but not alike (beyond 5%)
+    const std::vector<double> shared = shared_tail_terms({&pt, &bdpt, &mix});
+    ASSERT_EQ(shared.size(), items);
+    EXPECT_DOUBLE_EQ(shared[10], 59.9);
+    EXPECT_DOUBLE_EQ(shared[20], 24.0);
+    EXPECT_EQ(shared[30], 0.0);
+    EXPECT_EQ(shared[40], 0.0);
+    // 1% of 1000 pixels: the 10 largest shared terms, here the two fireflies and 8 of the small
+    // alike ones (ties with the threshold stay).
+    int left_out = 0;
+    for (size_t i = 0; i < items; ++i) left_out += shared[i] > 0 ? 1 : 0;
+    EXPECT_GE(left_out, 10);
+    EXPECT_LE(left_out, int(items / 7) + 2);
+    for (size_t i = 0; i < items; ++i) {
+        if (i != 10 && i != 20 && shared[i] > 0) {
+            EXPECT_GE(shared[i], 0.01 + 6e-5) << i;
+        }
+    }
+    // One camera candidate (pt beside lt): nothing to compare with.
+    for (double v : shared_tail_terms({&pt})) EXPECT_EQ(v, 0.0);
+    // Nothing alike: nothing left out.
+    std::vector<double> other(items, 1.0);
+    for (double v : shared_tail_terms({&pt, &other})) EXPECT_EQ(v, 0.0);
 }
 
 }  // namespace

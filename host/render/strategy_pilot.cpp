@@ -11,8 +11,10 @@ namespace {
 
 // Work items of one sparse pilot pass: enough pixels that the variance estimates and the
 // timings are steady, few enough that the pilot costs little.
-constexpr int kPilotItems = 8192;
-constexpr int kPilotPassesPerCandidate = 3;
+constexpr int kPilotItems = 3072;
+// Two sets of kPilotSetSize passes that share their pixel positions, and pass c (see the header).
+constexpr int kPilotSetSize = 4;
+constexpr int kPilotPassesPerCandidate = 2 * kPilotSetSize + 1;
 // The pilot may cost at most this share of the render's samples.
 constexpr double kPilotShare = 0.1;
 // How many standard errors a candidate's transport variance counts high (see the choice).
@@ -25,7 +27,7 @@ double seconds_between(std::chrono::steady_clock::time_point a, std::chrono::ste
 }
 
 // Fewer pixels than this (or than the film has) give variance estimates too noisy to choose by.
-constexpr int kPilotMinItems = 2048;
+constexpr int kPilotMinItems = 1024;
 
 uint64_t pilot_samples_at(int width, int height, int stride, size_t candidates) {
     return uint64_t(render_item_count(width, height, stride)) * kPilotPassesPerCandidate * candidates;
@@ -66,6 +68,10 @@ struct GridPass {
         : columns((w + k - 1) / k), rows((h + k - 1) / k), stride(k), width(w), height(h),
           camera(size_t(columns) * rows * 3), light(size_t(columns) * rows * 3) {}
     int items() const { return columns * rows; }
+    // Another pass of the same grid, pixel by pixel (a set's sum).
+    void add(const GridPass& other) {
+        for (size_t v = 0; v < camera.size(); ++v) camera[v] += other.camera[v], light[v] += other.light[v];
+    }
     // A pass's items (a dropped one adds nothing, as in add_to_film).
     void add(const RenderedItems& r) {
         size_t dropped = 0;
@@ -113,23 +119,66 @@ struct GroupedVariance {
     }
 };
 
+// At one grid pixel, half the squared difference of a and b (each scaled by `scale`: 1/n for
+// the sums of sets of n passes), summed over the channels, the light image's part times
+// light_share (see GroupedVariance).
+double difference_term(const GridPass& a, const GridPass& b, int item, double scale, double light_share) {
+    double term = 0;
+    for (int c = 0; c < 3; ++c) {
+        const size_t i = size_t(item) * 3 + size_t(c);
+        const double dc = scale * (a.camera[i] - b.camera[i]);
+        const double dl = scale * (a.light[i] - b.light[i]);
+        term += 0.5 * (dc * dc + dl * dl * light_share);
+    }
+    return term;
+}
+
+void add_pixel_term(GroupedVariance* v, int item, double pixel_term) {
+    const int g = item % kVarianceGroups;
+    v->sum[g] += pixel_term;
+    v->count[g] += 3;
+    v->pixel_sum_squares += pixel_term * pixel_term;
+    ++v->pixels;
+}
+
 GroupedVariance one_sample_variance(const GridPass& a, const GridPass& b, double light_share) {
     GroupedVariance v;
-    for (int item = 0; item < a.items(); ++item) {
-        const int g = item % kVarianceGroups;
-        double pixel_term = 0;
-        for (int c = 0; c < 3; ++c) {
-            const size_t i = size_t(item) * 3 + size_t(c);
-            const double dc = a.camera[i] - b.camera[i];
-            const double dl = a.light[i] - b.light[i];
-            pixel_term += 0.5 * (dc * dc + dl * dl * light_share);
-            ++v.count[g];
-        }
-        v.sum[g] += pixel_term;
-        v.pixel_sum_squares += pixel_term * pixel_term;
-        ++v.pixels;
+    for (int item = 0; item < a.items(); ++item)
+        add_pixel_term(&v, item, difference_term(a, b, item, 1.0, light_share));
+    return v;
+}
+
+// The transport variance of one sample, from the pairs (x_j, y_j) of two sets that share their
+// pixel positions (each pair's half squared difference, averaged over the set per pixel), and
+// that of a set's mean times the set's size (half the squared difference of the two sets' means,
+// times n), so that both are per sample.
+struct SetVariances {
+    GroupedVariance one, set;
+    std::vector<double> one_terms;  // `one`'s term of each grid pixel
+};
+SetVariances set_variances(const std::vector<GridPass>& x, const std::vector<GridPass>& y, const GridPass& x_sum,
+                           const GridPass& y_sum, double light_share) {
+    SetVariances v;
+    const double n = double(x.size());
+    for (int item = 0; item < x_sum.items(); ++item) {
+        double one = 0;
+        for (size_t j = 0; j < x.size(); ++j) one += difference_term(x[j], y[j], item, 1.0, light_share);
+        add_pixel_term(&v.one, item, one / n);
+        v.one_terms.push_back(one / n);
+        add_pixel_term(&v.set, item, n * difference_term(x_sum, y_sum, item, 1.0 / n, light_share));
     }
     return v;
+}
+
+// The median over the pixel groups of a's group means minus b's, at least 0. Two variances
+// that differ by a part spread over the image (edges, smooth shading) differ so in most groups,
+// while a firefly lands in one group: its cross terms with the other samples of its pixel,
+// whose sign is chance, would otherwise pass for such a part.
+double median_group_difference(const GroupedVariance& a, const GroupedVariance& b) {
+    double d[kVarianceGroups];
+    for (int g = 0; g < kVarianceGroups; ++g) d[g] = a.group_mean(g) - b.group_mean(g);
+    std::sort(d, d + kVarianceGroups);
+    return std::max(0.0, 0.5 * (d[kVarianceGroups / 2 - 1] + d[kVarianceGroups / 2]));
 }
 
 // The variance from where in the pixel a sample lands: whole minus transport, as the median over
@@ -140,10 +189,7 @@ GroupedVariance one_sample_variance(const GridPass& a, const GridPass& b, double
 // transport variance keeps the plain mean: a firefly there is the candidate's own, and the
 // render will have it too.
 double pixel_variance(const GroupedVariance& whole, const GroupedVariance& transport) {
-    double d[kVarianceGroups];
-    for (int g = 0; g < kVarianceGroups; ++g) d[g] = whole.group_mean(g) - transport.group_mean(g);
-    std::sort(d, d + kVarianceGroups);
-    return std::max(0.0, 0.5 * (d[kVarianceGroups / 2 - 1] + d[kVarianceGroups / 2]));
+    return median_group_difference(whole, transport);
 }
 
 // The candidate other than lt with the highest efficiency_transport_only: the figure lt must beat.
@@ -238,6 +284,29 @@ int timed_pilot_stride(int width, int height, double time_budget) {
     return stride;
 }
 
+std::vector<double> shared_tail_terms(const std::vector<const std::vector<double>*>& camera_terms) {
+    const size_t items = camera_terms.empty() ? 0 : camera_terms[0]->size();
+    if (camera_terms.size() < 2) return std::vector<double>(items, 0.0);
+    std::vector<double> shared(items, 0.0);
+    for (size_t item = 0; item < items; ++item) {
+        double least = (*camera_terms[0])[item], largest = least;
+        for (const std::vector<double>* terms : camera_terms) {
+            least = std::min(least, (*terms)[item]);
+            largest = std::max(largest, (*terms)[item]);
+        }
+        if (largest <= least * (1.0 + kSharedTailTolerance)) shared[item] = least;
+    }
+    // The largest kSharedTailShare of the pixels' shared parts (all of them, where fewer pixels
+    // share one).
+    std::vector<double> sorted = shared;
+    const size_t keep = std::min(items - 1, size_t(double(items) * (1.0 - kSharedTailShare)));
+    std::nth_element(sorted.begin(), sorted.begin() + long(keep), sorted.end());
+    const double threshold = sorted[keep];
+    for (double& v : shared)
+        if (v < threshold || (v == threshold && threshold == 0.0)) v = 0;
+    return shared;
+}
+
 StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene, const RenderOptions& options,
                                  int spp, double time_budget, RenderStats* stats) {
     using Clock = std::chrono::steady_clock;
@@ -267,9 +336,9 @@ StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene
     }
 
     const Clock::time_point start = Clock::now();
-    // Passes a, b, c (see the header), each from its own seed; a and b share pixel positions.
-    // Round robin, so a change of the machine's load hits every candidate alike.
-    const uint32_t seed_a = options.seed ^ 0x6a09e667u, seed_b = options.seed ^ 0xbb67ae85u,
+    // Sets x and y and pass c (see the header), each from its own seed; x and y share pixel
+    // positions. Round robin, so a change of the machine's load hits every candidate alike.
+    const uint32_t seed_x = options.seed ^ 0x6a09e667u, seed_y = options.seed ^ 0xbb67ae85u,
                    seed_c = options.seed ^ 0x3c6ef372u;
     std::vector<std::vector<GridPass>> passes(size_t(k), std::vector<GridPass>(kPilotPassesPerCandidate,
                                                                             GridPass(width, height, pilot.pixel_stride)));
@@ -285,8 +354,16 @@ StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene
             if (c.integrator == Integrator::Bdpt) r->set_strategy_mix(c.light_subpaths, c.inner_connections);
             PassSpec pass;
             pass.pixel_stride = pilot.pixel_stride;
-            pass.seed = round == 0 ? seed_a : round == 1 ? seed_b : seed_c;
-            pass.position_seed = round == 2 ? seed_c : seed_a;
+            if (round < 2 * kPilotSetSize) {
+                // Sample j of set x or y: the sampler's j-th sample, so that a set is stratified
+                // as kPilotSetSize samples of the render are.
+                const uint32_t j = uint32_t(round % kPilotSetSize);
+                pass.seed = round < kPilotSetSize ? seed_x : seed_y;
+                pass.sample_index = pass.position_sample_index = j;
+                pass.position_seed = seed_x;
+            } else {
+                pass.seed = pass.position_seed = seed_c;
+            }
             const Clock::time_point pass_start = Clock::now();
             const RenderedItems rendered = r->render_items(pass, 0, items);
             seconds[size_t(i)] = std::min(seconds[size_t(i)], seconds_between(pass_start, Clock::now()));
@@ -294,14 +371,45 @@ StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene
             stats->add_counts(rendered.counts);
         }
 
+    std::vector<SetVariances> transport(static_cast<size_t>(k));
+    for (int i = 0; i < k; ++i) {
+        const std::vector<GridPass>& f = passes[size_t(i)];
+        const std::vector<GridPass> x(f.begin(), f.begin() + kPilotSetSize),
+            y(f.begin() + kPilotSetSize, f.begin() + 2 * kPilotSetSize);
+        GridPass x_sum = x[0], y_sum = y[0];
+        for (int j = 1; j < kPilotSetSize; ++j) {
+            x_sum.add(x[size_t(j)]);
+            y_sum.add(y[size_t(j)]);
+        }
+        transport[size_t(i)] = set_variances(x, y, x_sum, y_sum, full_per_sparse);
+    }
+    std::vector<const std::vector<double>*> camera_terms;
+    for (int i = 0; i < k; ++i)
+        if (pilot.candidates[size_t(i)].integrator != Integrator::Lt)
+            camera_terms.push_back(&transport[size_t(i)].one_terms);
+    const std::vector<double> shared_tail = shared_tail_terms(camera_terms);
+
     for (int i = 0; i < k; ++i) {
         StrategyCandidate& c = pilot.candidates[size_t(i)];
         const std::vector<GridPass>& f = passes[size_t(i)];
-        const GroupedVariance transport = one_sample_variance(f[0], f[1], full_per_sparse);
-        const GroupedVariance whole = one_sample_variance(f[0], f[2], full_per_sparse);
-        c.variance_transport = transport.mean();
-        c.variance_transport_standard_error = transport.standard_error();
-        c.variance_pixel = pixel_variance(whole, transport);
+        const SetVariances& t = transport[size_t(i)];
+        const GroupedVariance whole = one_sample_variance(f[0], f[2 * kPilotSetSize], full_per_sparse);
+        c.variance_transport = t.one.mean();
+        c.variance_transport_standard_error = t.one.standard_error();
+        // N x (variance of N samples' mean) = A + B / N: B is what stratification removes
+        // faster than 1/N. From N = 1 and N = kPilotSetSize.
+        const double n_set = kPilotSetSize;
+        c.variance_transport_stratified =
+            std::min(c.variance_transport, median_group_difference(t.one, t.set) * n_set / (n_set - 1.0));
+        // lt's terms were not compared (it has no camera subpath): it keeps them all.
+        GroupedVariance own = t.one;
+        if (c.integrator != Integrator::Lt) {
+            own = GroupedVariance();
+            for (int item = 0; item < items; ++item)
+                add_pixel_term(&own, item, t.one_terms[size_t(item)] - shared_tail[size_t(item)]);
+        }
+        c.variance_shared_tail = c.variance_transport - own.mean();
+        c.variance_pixel = pixel_variance(whole, t.one);
         c.seconds_per_pass = seconds[size_t(i)] * full_per_sparse;
         const double n = time_budget > 0 && c.seconds_per_pass > 0 ? std::max(1.0, time_budget / c.seconds_per_pass)
                                                                     : double(std::max(spp, 1));
@@ -309,14 +417,15 @@ StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene
         // Heavy tails (a path tracer's fireflies in fog) make a sparse grid's variance come out
         // low more often than high, and a candidate chosen for a variance it does not have can
         // cost 25x (without this, fog-spot at 128x128 got pt, 0.04-0.07x of bdpt's efficiency
-        // there, in one of three pilots); so each transport variance counts
-        // kRiskStandardErrors standard errors high.
-        const double risky_transport =
-            c.variance_transport + kRiskStandardErrors * c.variance_transport_standard_error;
-        c.predicted_mse = risky_transport / n + c.variance_pixel / std::pow(n, kPixelVarianceExponent);
+        // there, in one of three pilots); so the part of each transport variance that falls as
+        // 1/N (less the shared tail) counts kRiskStandardErrors standard errors high.
+        const double risky_transport = std::max(0.0, own.mean() - c.variance_transport_stratified) +
+                                       kRiskStandardErrors * own.standard_error();
+        const double transport_mse = risky_transport / n + c.variance_transport_stratified / (n * n);
+        c.predicted_mse = transport_mse + c.variance_pixel / std::pow(n, kPixelVarianceExponent);
         const double cost = c.predicted_mse * n * c.seconds_per_pass;
         c.efficiency = cost > 0 ? 1.0 / cost : 0.0;
-        const double transport_cost = risky_transport * c.seconds_per_pass;
+        const double transport_cost = transport_mse * n * c.seconds_per_pass;
         c.efficiency_transport_only = transport_cost > 0 ? 1.0 / transport_cost : 0.0;
     }
     pilot.chosen = choose_strategy_candidate(pilot.candidates);

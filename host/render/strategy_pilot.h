@@ -4,25 +4,35 @@
 // default `clbdpt render` (--integrator auto) runs it; --integrator bdpt|pt|lt and
 // --light-subpaths / --connections fix the choice by hand.
 //
-// The pilot renders a sparse grid of pixels (one of each k x k block, about 8192 of them, fewer
-// for a short render) three times per candidate, on the first device, and throws the passes
-// away afterwards (they are not stratified with the render's own samples, and adding them would
-// cost more than it gives):
-//   a, b  independent samples that share their pixel positions: (a - b)^2 / 2 estimates the
-//         variance of light transport within the pixel, v_transport;
-//   a, c  fully independent samples: (a - c)^2 / 2 estimates the whole variance of one sample,
-//         of which v_pixel = whole - v_transport comes from where in the pixel it lands
-//         (the median over 8 interleaved groups of pixels, so that a firefly in pass c does
-//         not pass for edges).
-// A stratified sampler removes the two at different rates: the pixel integral of an image with
-// edges (a visible light's outline) is a 2D discontinuous integrand, whose variance under
-// Owen-scrambled Sobol points falls as N^-3/2, while transport keeps close to N^-1. So the
-// squared error of N samples is predicted as v_transport / N + v_pixel / N^1.5, and the
+// The pilot renders a sparse grid of pixels (one of each k x k block, about 3072 of them, fewer
+// for a short render) nine times per candidate, on the first device, and throws the passes away
+// afterwards (they are not stratified with the render's own samples, and adding them would cost
+// more than it gives):
+//   x, y  two sets of 4 passes, each set the sampler's first 4 samples of a pixel under its own
+//         seed, both sets at the same 4 pixel positions: the half squared difference of x_j
+//         and y_j estimates the variance of one sample's light transport within the pixel,
+//         v_transport; that of the sets' means, times 4, the same for a set of 4 stratified
+//         samples;
+//   c     a sample at its own pixel position: (x_0 - c)^2 / 2 estimates the whole variance of
+//         one sample, of which v_pixel = whole - v_transport comes from where in the pixel it
+//         lands (the median over 8 interleaved groups of pixels, so that a firefly in pass c
+//         does not pass for edges).
+// A stratified sampler removes the parts at different rates. The pixel integral of an image
+// with edges (a visible light's outline) is a 2D discontinuous integrand, whose variance under
+// Owen-scrambled Sobol points falls as N^-3/2. Of light transport, N samples keep
+// A / N + B / N^2 with A + B = v_transport: B, from the set of 4, is what the sampler's
+// stratification removes (the smooth parts of the integrand), A what it cannot (fireflies, high
+// dimensions); B is the median over the 8 groups, since a firefly's cross terms with the other
+// samples of its pixel would pass for it. Fitted on cornell-specular's full films at 1 and 4
+// spp, the model predicts the squared error at 64 spp within 12-32%, where one sample's
+// variance / N overstates it 2.3x for pt and 4.6x for BDPT without inner connections. So the
+// squared error of N samples is predicted as A / N + B / N^2 + v_pixel / N^1.5, and the
 // candidate with the least error times time (N x seconds per sample, from its fastest pass) is
-// chosen: the inverse of Grittmann et al.'s efficiency. v_transport counts two standard errors
-// high, so that a candidate whose fireflies the grid happened to miss is not chosen for them.
-// The light image (t = 1) of a sparse pass holds only the sparse pixels' light subpaths; its
-// variance is scaled to a full pass.
+// chosen: the inverse of Grittmann et al.'s efficiency. A leaves out the samples that every
+// camera candidate has alike (shared_tail_terms) and counts two standard errors high, so that a
+// candidate whose fireflies the grid happened to miss is not chosen for them. The light image
+// (t = 1) of a sparse pass holds only the sparse pixels' light subpaths; its variance is scaled
+// to a full pass.
 #pragma once
 
 #include <cstdint>
@@ -43,6 +53,12 @@ struct StrategyCandidate {
     // in the pixel.
     double variance_transport = 0;
     double variance_transport_standard_error = 0;  // over the pilot's pixels
+    // The part B of variance_transport = A + B that the render's stratified samples remove faster
+    // than 1/N: N samples' transport variance is A / N + B / N^2.
+    double variance_transport_stratified = 0;
+    // The part of variance_transport from the grid's few pixels where every camera candidate has
+    // the same large term: left out of the prediction (see run_strategy_pilot).
+    double variance_shared_tail = 0;
     double variance_pixel = 0;
     double seconds_per_pass = 0;    // a full pass, scaled from the sparse ones
     double predicted_spp = 0;       // what the render will reach (given, or from a time budget)
@@ -91,12 +107,12 @@ int choose_strategy_candidate(const std::vector<StrategyCandidate>& candidates);
 std::string light_tracing_passed_over(const std::vector<StrategyCandidate>& candidates, int chosen);
 
 // Whether the pilot of `candidates` candidates is worth running for a render of `spp` samples per
-// pixel: it may cost at most a tenth of the render's samples, on a sparse grid of at least 2048
+// pixel: it may cost at most a tenth of the render's samples, on a sparse grid of at least 1024
 // pixels (or the whole film, if smaller).
 bool strategy_pilot_fits(int width, int height, int spp, size_t candidates);
 
-// The sparse grid's stride for a render of `time_budget` seconds: the full grid (about 8192
-// pixels) from 10 s on, proportionally fewer pixels for less, down to 2048 (or the whole film).
+// The sparse grid's stride for a render of `time_budget` seconds: the full grid (about 3072
+// pixels) from 10 s on, proportionally fewer pixels for less, down to 1024 (or the whole film).
 int timed_pilot_stride(int width, int height, double time_budget);
 
 // Whether adaptive sampling's extra samples (render/adaptive.h) of a render with the pilot's
@@ -114,6 +130,21 @@ int timed_pilot_stride(int width, int height, double time_budget);
 // squared error from 1.67e-4 to 2.5e-4.
 constexpr double kPathTracedExtrasMinShare = 0.5;
 bool path_traced_extra_samples(const std::vector<StrategyCandidate>& candidates, int chosen, bool light_to_lens);
+
+// Per grid pixel, the transport term (one sample's, as in variance_transport) that every camera
+// candidate has alike there, where it is among the largest kSharedTailShare of such terms; else
+// 0. The candidates' passes use the same seeds, so a path that each samples the same way (on
+// cornell-specular: through the mirror onto the glass sphere's caustic, which only the camera
+// subpath reaches) comes out as the same sample in each, to within kSharedTailTolerance. Such
+// a lone sample raises every candidate's estimate by the same amount: it cannot say which
+// candidate is better, yet it flattens the ratios towards the cheapest, and a sparse grid
+// catches a handful of them or none (cornell-specular, pass pairs of three seeds: the BDPT
+// mixes' transport variance 0.028, 0.0083 and 0.023, of which a few such pixels made 0.021 in the
+// first). The prediction leaves them out; a candidate's own fireflies stay in. camera_terms:
+// each camera candidate's terms, all of one length; with fewer than two candidates, all 0.
+constexpr double kSharedTailShare = 0.01;
+constexpr double kSharedTailTolerance = 0.05;
+std::vector<double> shared_tail_terms(const std::vector<const std::vector<double>*>& camera_terms);
 
 // Renders the pilot of every candidate on `device` (stats gain its samples, rays and build
 // time) and picks the candidate with the least predicted error x time at `spp` samples, or,
