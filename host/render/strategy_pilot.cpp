@@ -286,7 +286,7 @@ int timed_pilot_stride(int width, int height, double time_budget) {
 
 std::vector<double> shared_tail_terms(const std::vector<const std::vector<double>*>& camera_terms) {
     const size_t items = camera_terms.empty() ? 0 : camera_terms[0]->size();
-    if (camera_terms.size() < 2) return std::vector<double>(items, 0.0);
+    if (camera_terms.size() < 2 || items == 0) return std::vector<double>(items, 0.0);
     std::vector<double> shared(items, 0.0);
     for (size_t item = 0; item < items; ++item) {
         double least = (*camera_terms[0])[item], largest = least;
