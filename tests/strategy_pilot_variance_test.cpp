@@ -8,7 +8,9 @@
 // to the grid, or a wrong scale, shows.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "render/strategy_pilot.h"
 #include "test_scenes.h"
@@ -108,27 +110,37 @@ TEST(StrategyPilotVariance, TransportVarianceMatchesFullPasses) {
 }
 
 // cornell-specular: BDPT without inner connections renders the glass sphere's caustics far
-// better than pt (64 spp with adaptive sampling: MSE 1.0e-4 against 4.5e-4, for 2.7x the time),
-// but every candidate also meets the same few samples through the mirror onto the caustic, which
-// only the camera subpath reaches; counted in, they made the pilot pick pt in 5 of 5 seeds. With
-// them left out (shared_tail_terms) a BDPT mix must win most pilots. Three seeds, at least two.
-TEST(StrategyPilotChoice, CornellSpecularGetsABdptMix) {
+// better than pt (64 spp with adaptive sampling: MSE 1.0e-4 against 4.5e-4, for 2.7x the time;
+// without adaptive sampling 2.2e-4 against 6.1e-4), but every candidate also meets the same few
+// samples through the mirror onto the caustic, which only the camera subpath reaches. Counted
+// in, they made pt's predicted error only 1.55, 3.2 and 1.7 times the mix's for these seeds (the
+// pilot picked pt in 5 of 5 seeds); left out (shared_tail_terms), 2.6, 25 and 2.8. The choice
+// also weighs each candidate's pass time, which a loaded machine (tests run in parallel) skews,
+// so the test asserts the timing-free ratio: its median over three seeds at least 2.2, between
+// the two.
+TEST(StrategyPilotChoice, CornellSpecularPredictsTheCausticsOfPt) {
     Scene loaded = load_scene(scene_path("cornell-specular"));
     DeviceScene scene = build_device_scene(loaded, 256, 256);
-    int mixes = 0;
+    std::vector<double> ratios;
     double shared_tail = 0;
-    std::string chosen;
     for (uint32_t seed : {31u, 32u, 33u}) {
         const RenderOptions options = make_options(Integrator::Bdpt, loaded.render.max_depth, seed, SamplerKind::Sobol);
         RenderStats stats;
         const StrategyPilot pilot = run_strategy_pilot(test_device(), scene, options, 64, 0.0, &stats);
-        mixes += pilot.choice().integrator == Integrator::Bdpt ? 1 : 0;
-        chosen += " " + pilot.choice().name + ";";
-        for (const StrategyCandidate& c : pilot.candidates) shared_tail = std::max(shared_tail, c.variance_shared_tail);
+        double pt = 0, mix = 0;
+        for (const StrategyCandidate& c : pilot.candidates) {
+            if (c.integrator == Integrator::Pt) pt = c.predicted_mse;
+            if (c.integrator == Integrator::Bdpt && c.light_subpaths == 1.0f && !c.inner_connections)
+                mix = c.predicted_mse;
+            shared_tail = std::max(shared_tail, c.variance_shared_tail);
+        }
+        ASSERT_GT(mix, 0.0);
+        ratios.push_back(pt / mix);
     }
-    EXPECT_GE(mixes, 2) << chosen;
+    std::sort(ratios.begin(), ratios.end());
+    EXPECT_GE(ratios[1], 2.2) << "pt / BDPT without inner connections: " << ratios[0] << ", " << ratios[1] << ", "
+                              << ratios[2];
     EXPECT_GT(shared_tail, 0.0) << "the mirror's caustic samples, shared by every candidate";
 }
-
 }  // namespace
 }  // namespace clbdpt::test
