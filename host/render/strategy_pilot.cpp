@@ -110,6 +110,14 @@ struct GroupedVariance {
         return n ? s / double(n) : 0;
     }
     double group_mean(int g) const { return count[g] ? sum[g] / double(count[g]) : 0; }
+    // One grid pixel's term (summed over its channels).
+    void add(int item, double pixel_term) {
+        const int g = item % kVarianceGroups;
+        sum[g] += pixel_term;
+        count[g] += 3;
+        pixel_sum_squares += pixel_term * pixel_term;
+        ++pixels;
+    }
     // The standard error of mean(), from the spread of the pixels' terms.
     double standard_error() const {
         if (pixels < 2) return 0;
@@ -133,39 +141,36 @@ double difference_term(const GridPass& a, const GridPass& b, int item, double sc
     return term;
 }
 
-void add_pixel_term(GroupedVariance* v, int item, double pixel_term) {
-    const int g = item % kVarianceGroups;
-    v->sum[g] += pixel_term;
-    v->count[g] += 3;
-    v->pixel_sum_squares += pixel_term * pixel_term;
-    ++v->pixels;
-}
-
 GroupedVariance one_sample_variance(const GridPass& a, const GridPass& b, double light_share) {
     GroupedVariance v;
     for (int item = 0; item < a.items(); ++item)
-        add_pixel_term(&v, item, difference_term(a, b, item, 1.0, light_share));
+        v.add(item, difference_term(a, b, item, 1.0, light_share));
     return v;
 }
 
-// The transport variance of one sample, from the pairs (x_j, y_j) of two sets that share their
-// pixel positions (each pair's half squared difference, averaged over the set per pixel), and
-// that of a set's mean times the set's size (half the squared difference of the two sets' means,
-// times n), so that both are per sample.
+// The transport variance of one sample, from the pairs (x_j, y_j) of two sets of n passes that
+// share their pixel positions (each pair's half squared difference, averaged over the set per
+// pixel), and that of a set's mean times n (half the squared difference of the two sets' means,
+// times n), so that both are per sample. `passes`: set x, then set y.
 struct SetVariances {
     GroupedVariance one, set;
     std::vector<double> one_terms;  // `one`'s term of each grid pixel
 };
-SetVariances set_variances(const std::vector<GridPass>& x, const std::vector<GridPass>& y, const GridPass& x_sum,
-                           const GridPass& y_sum, double light_share) {
+SetVariances set_variances(const std::vector<GridPass>& passes, int n, double light_share) {
+    const GridPass* x = passes.data();
+    const GridPass* y = passes.data() + n;
+    GridPass x_sum = x[0], y_sum = y[0];
+    for (int j = 1; j < n; ++j) {
+        x_sum.add(x[j]);
+        y_sum.add(y[j]);
+    }
     SetVariances v;
-    const double n = double(x.size());
     for (int item = 0; item < x_sum.items(); ++item) {
         double one = 0;
-        for (size_t j = 0; j < x.size(); ++j) one += difference_term(x[j], y[j], item, 1.0, light_share);
-        add_pixel_term(&v.one, item, one / n);
+        for (int j = 0; j < n; ++j) one += difference_term(x[j], y[j], item, 1.0, light_share);
+        v.one.add(item, one / n);
         v.one_terms.push_back(one / n);
-        add_pixel_term(&v.set, item, n * difference_term(x_sum, y_sum, item, 1.0 / n, light_share));
+        v.set.add(item, n * difference_term(x_sum, y_sum, item, 1.0 / n, light_share));
     }
     return v;
 }
@@ -371,18 +376,8 @@ StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene
             stats->add_counts(rendered.counts);
         }
 
-    std::vector<SetVariances> transport(static_cast<size_t>(k));
-    for (int i = 0; i < k; ++i) {
-        const std::vector<GridPass>& f = passes[size_t(i)];
-        const std::vector<GridPass> x(f.begin(), f.begin() + kPilotSetSize),
-            y(f.begin() + kPilotSetSize, f.begin() + 2 * kPilotSetSize);
-        GridPass x_sum = x[0], y_sum = y[0];
-        for (int j = 1; j < kPilotSetSize; ++j) {
-            x_sum.add(x[size_t(j)]);
-            y_sum.add(y[size_t(j)]);
-        }
-        transport[size_t(i)] = set_variances(x, y, x_sum, y_sum, full_per_sparse);
-    }
+    std::vector<SetVariances> transport;
+    for (int i = 0; i < k; ++i) transport.push_back(set_variances(passes[size_t(i)], kPilotSetSize, full_per_sparse));
     std::vector<const std::vector<double>*> camera_terms;
     for (int i = 0; i < k; ++i)
         if (pilot.candidates[size_t(i)].integrator != Integrator::Lt)
@@ -406,7 +401,7 @@ StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene
         if (c.integrator != Integrator::Lt) {
             own = GroupedVariance();
             for (int item = 0; item < items; ++item)
-                add_pixel_term(&own, item, t.one_terms[size_t(item)] - shared_tail[size_t(item)]);
+                own.add(item, t.one_terms[size_t(item)] - shared_tail[size_t(item)]);
         }
         c.variance_shared_tail = c.variance_transport - own.mean();
         c.variance_pixel = pixel_variance(whole, t.one);
