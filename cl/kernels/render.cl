@@ -25,9 +25,6 @@
 #if INTEGRATOR == INTEGRATOR_PT && !defined(HAS_MEDIA) && !defined(STRATEGY_IMAGES) && !defined(PT_FROM_SUBPATHS)
 #define PT_ONE_VERTEX_AT_A_TIME 1
 #include "path_tracer.h"
-#ifdef PT_LANES
-#include "path_tracer_wide.h"
-#endif
 #else
 #define PT_ONE_VERTEX_AT_A_TIME 0
 #endif
@@ -51,14 +48,9 @@ __kernel void render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, __global float
 #endif
 ) {
     int gid = get_global_id(0);
+    if (gid >= params.pixel_count) return;
     uint rays_traced = 0;
     SceneData scene = SCENE_DATA_FROM_KERNEL_ARGS(&rays_traced);
-#if PT_ONE_VERTEX_AT_A_TIME && defined(PT_LANES)
-    /* Work item gid renders launch items gid * PT_LANES on (cl/path_tracer_wide.h). */
-    if (gid * PT_LANES < params.pixel_count) path_tracer_lanes(&scene, &params, gid * PT_LANES, camera_out);
-    return;
-#endif
-    if (gid >= params.pixel_count) return;
 
     int item = params.first_pixel + gid;
     int pixel = launch_item_pixel(item, params.width, params.height, params.pixel_stride, params.run_pixel,

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdlib>
 #include <iterator>
 #include <optional>
 #include <thread>
@@ -60,10 +59,6 @@ Renderer::Renderer(DeviceContext& device, const DeviceScene& scene, const Render
     }
     if (options.pt_from_subpaths && options.integrator == Integrator::Pt) stats_.defines.push_back("PT_FROM_SUBPATHS");
     if (options.debug_nan_pixel >= 0) stats_.defines.push_back("DEBUG_NAN_PIXEL=" + std::to_string(options.debug_nan_pixel));
-    if (const char* lanes = std::getenv("CLBDPT_PT_LANES"); lanes && std::atoi(lanes) > 1) {
-        lanes_ = std::atoi(lanes);
-        stats_.defines.push_back("PT_LANES=" + std::to_string(lanes_));
-    }
     const ProgramBuild& build = device.program("kernels/render.cl", stats_.defines);
     stats_.build_seconds = build.seconds;
     stats_.program_from_cache = build.from_cache;
@@ -114,7 +109,7 @@ Renderer::Renderer(DeviceContext& device, const DeviceScene& scene, const Render
             RenderParams empty{};  // pixel_count 0: every work item returns at once
             kernel_.setArg(kParamsArg, empty);
             const size_t local = size_t(local_size_);
-            const size_t widest = (size_t(work_items(batch_items_)) + local - 1) / local * local;
+            const size_t widest = (size_t(batch_items_) + local - 1) / local * local;
             device.queue().enqueueNDRangeKernel(kernel_, cl::NullRange, cl::NDRange(widest), cl::NDRange(local));
             device.queue().finish();
             stats_.build_seconds +=
@@ -125,8 +120,6 @@ Renderer::Renderer(DeviceContext& device, const DeviceScene& scene, const Render
                     " while setting up the render on " + device.entry().name);
     }
 }
-
-int Renderer::work_items(int launch_items) const { return (launch_items + lanes_ - 1) / lanes_; }
 
 void Renderer::reset_counters() {
     stats_.samples = 0;
@@ -182,11 +175,11 @@ void Renderer::enqueue_launch(LaunchSlot& slot, const RenderParams& params, int 
         slot.enqueued = std::chrono::steady_clock::now();
         if (local_size_ > 0) {
             const size_t local = size_t(local_size_);
-            const size_t global = (size_t(work_items(item_count)) + local - 1) / local * local;
+            const size_t global = (size_t(item_count) + local - 1) / local * local;
             queue.enqueueNDRangeKernel(kernel_, cl::NullRange, cl::NDRange(global), cl::NDRange(local), nullptr,
                                        &slot.kernel_done);
         } else {
-            queue.enqueueNDRangeKernel(kernel_, cl::NullRange, cl::NDRange(size_t(work_items(item_count))), cl::NullRange, nullptr,
+            queue.enqueueNDRangeKernel(kernel_, cl::NullRange, cl::NDRange(size_t(item_count)), cl::NullRange, nullptr,
                                        &slot.kernel_done);
         }
         queue.enqueueReadBuffer(slot.camera_out, CL_FALSE, 0, sizeof(cl_float4) * item_count, slot.camera_host.data(),

@@ -186,8 +186,6 @@ private:
     Error rendering_failure(const cl::Error& e) const;
     // Enqueues one launch of the render kernel over a batch's items and the read-back of its
     // outputs into `slot`, without waiting for them.
-    // Work items of a launch of launch_items items (lanes_ items each).
-    int work_items(int launch_items) const;
     void enqueue_launch(LaunchSlot& slot, const RenderParams& params, int item_count);
     // Waits for a launch's outputs, shrinks the following launches if it took too long, and
     // collects its outputs into `out`.
@@ -212,7 +210,6 @@ private:
     int launch_items_ = 0;  // work items per launch now (at most batch_items_)
     int launches_ = 0;
     int local_size_ = 0;  // 0 = the driver's choice
-    int lanes_ = 1;       // launch items per work item (PT_LANES, cl/path_tracer_wide.h)
     int zsobol_log2_spp_ = 0, zsobol_base4_digits_ = 0;
     int splat_slots_ = 0;
     int strategy_slots_ = 0;
