@@ -142,5 +142,6 @@ TEST(StrategyPilotChoice, CornellSpecularPredictsTheCausticsOfPt) {
                               << ratios[2];
     EXPECT_GT(shared_tail, 0.0) << "the mirror's caustic samples, shared by every candidate";
 }
+
 }  // namespace
 }  // namespace clbdpt::test

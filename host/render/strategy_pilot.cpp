@@ -308,7 +308,7 @@ std::vector<double> shared_tail_terms(const std::vector<const std::vector<double
     std::nth_element(sorted.begin(), sorted.begin() + long(keep), sorted.end());
     const double threshold = sorted[keep];
     for (double& v : shared)
-        if (v < threshold || (v == threshold && threshold == 0.0)) v = 0;
+        if (v < threshold) v = 0;
     return shared;
 }
 
