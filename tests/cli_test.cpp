@@ -278,6 +278,9 @@ TEST_F(CliTest, UnequalDevicesShareOneRenderExactly) {
 // A device whose launches fail mid-render (injected: device K fails after N launches, here in
 // the middle of a pass of 9 launches) leaves the render with one warning; the run it was
 // rendering goes to the other device, and the image equals one device's render bit for bit.
+// N is below 9 for either device: each device's first run is one pass (its rate is not yet
+// measured, render/unit_queue.cpp), and how many launches it gets after that depends on the
+// two devices' speeds (on a loaded machine device 0 once got no more, and "0:14" never failed).
 // The last device failing fails the render, writing nothing.
 TEST_F(CliTest, FailingDeviceLosesNothing) {
     const std::string render = "render " + std::string(CLBDPT_SCENES_DIR) +
@@ -286,7 +289,7 @@ TEST_F(CliTest, FailingDeviceLosesNothing) {
     const std::string two_devices = "POCL_DEVICES='pthread pthread' POCL_MAX_PTHREAD_COUNT=1 ";
     CommandResult one = run(render + " -o " + out("one.exr"));
     ASSERT_EQ(one.status, 0) << one.output;
-    for (const char* failing : {"1:5", "0:14"}) {
+    for (const char* failing : {"1:5", "0:7"}) {
         CommandResult r = run(render + " --device all --debug-fail-device " + failing + " -o " + out("two.exr") +
                                   " --stats " + out("two.json"),
                               two_devices);
