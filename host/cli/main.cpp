@@ -190,9 +190,9 @@ void check_film_fits_in_memory(int width, int height, int strategy_depth) {
 
 // --integrator auto: runs the efficiency pilot on `device` when the render is long enough for it
 // to pay off (render/strategy_pilot.h), sets the chosen mix in `options`, and moves the pilot's
-// renderer for the chosen integrator into `renderers` (it goes on to render there); `adaptive`:
-// whether adaptive sampling follows the passes. Returns how the mix was chosen, for the summary.
-std::string choose_strategy_mix(DeviceContext& device, const DeviceScene& ds, RenderOptions* options, bool adaptive,
+// renderer for the chosen integrator into `renderers` (it goes on to render there). Returns how
+// the mix was chosen, for the summary.
+std::string choose_strategy_mix(DeviceContext& device, const DeviceScene& ds, RenderOptions* options,
                                 StrategyPilot* pilot, RenderStats* pilot_stats,
                                 std::vector<std::unique_ptr<Renderer>>* renderers) {
     // A time budget gets the pilot when it is at least this many seconds.
@@ -203,8 +203,7 @@ std::string choose_strategy_mix(DeviceContext& device, const DeviceScene& ds, Re
     const size_t candidates = strategy_candidates(light_tracing_is_a_candidate(ds)).size();
     if (timed ? options->time_budget < kPilotMinBudget : !strategy_pilot_fits(width, height, options->spp, candidates))
         return "bdpt: too few samples for the pilot to pay off";
-    *pilot = run_strategy_pilot(device, ds, *options, timed ? 0 : options->spp, options->time_budget, adaptive,
-                                pilot_stats);
+    *pilot = run_strategy_pilot(device, ds, *options, timed ? 0 : options->spp, options->time_budget, pilot_stats);
     const StrategyCandidate& c = pilot->choice();
     options->integrator = c.integrator;
     options->light_subpaths = c.light_subpaths;
@@ -403,21 +402,12 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
     std::vector<std::unique_ptr<Renderer>> renderers;
     std::vector<Renderer*> renderer_list;
 
-    // Adaptive sampling (render/adaptive.h) wherever its extra samples can follow the passes:
-    // not for a time budget (no sample count to add to), resumed or checkpointed renders (a
-    // checkpoint holds whole passes), several processes, zsobol (neighbouring pixels share a
-    // sequence) or strategy images; and from 8 spp on, below which a pixel's variance is too
-    // rough to plan from.
-    const bool adaptive = args.adaptive == "on" && options.time_budget <= 0 && options.spp >= kAdaptiveMinSpp &&
-                          !resumed && checkpoint_path.empty() && cluster.size() == 1 &&
-                          options.sampler != SamplerKind::ZSobol &&
-                          options.strategy_images == RenderOptions::StrategyImages::Off;
     RenderStats pilot_stats;
     StrategyPilot pilot;
     const std::string mix_note =
         resumed ? "as in checkpoint '" + args.resume + "' (" + std::to_string(resumed->film.spp) + " spp resumed)"
         : automatic && !mix_by_hand && leader
-            ? choose_strategy_mix(device, ds, &options, adaptive, &pilot, &pilot_stats, &renderers)
+            ? choose_strategy_mix(device, ds, &options, &pilot, &pilot_stats, &renderers)
             : "";
     // Every process renders with the leader's integrator and strategy mix.
     RenderPlan plan{int(options.integrator), options.light_subpaths, options.inner_connections ? 1 : 0};
@@ -489,6 +479,15 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
         std::fprintf(stderr, "\nclbdpt: warning: device %s; it left the render and its pass went to the others\n",
                      what.c_str());
     };
+    // Adaptive sampling (render/adaptive.h) wherever its extra samples can follow the passes:
+    // not for a time budget (no sample count to add to), resumed or checkpointed renders (a
+    // checkpoint holds whole passes), several processes, zsobol (neighbouring pixels share a
+    // sequence) or strategy images; and from 8 spp on, below which a pixel's variance is too
+    // rough to plan from.
+    const bool adaptive = args.adaptive == "on" && options.time_budget <= 0 && options.spp >= kAdaptiveMinSpp &&
+                          !resumed && checkpoint_path.empty() && cluster.size() == 1 &&
+                          options.sampler != SamplerKind::ZSobol &&
+                          options.strategy_images == RenderOptions::StrategyImages::Off;
     options.track_variance = adaptive;
     RenderStats st;
     const double seconds_before_passes = seconds_since(start) - pilot.seconds;

@@ -5,8 +5,6 @@
 #include <cmath>
 #include <cstdio>
 
-#include "film/rendered_items.h"
-
 namespace clbdpt {
 
 namespace {
@@ -31,46 +29,8 @@ double seconds_between(std::chrono::steady_clock::time_point a, std::chrono::ste
 // Fewer pixels than this (or than the film has) give variance estimates too noisy to choose by.
 constexpr int kPilotMinItems = 1024;
 
-// A candidate's timing passes (timing_pass_seconds): this many, each of runs of neighbouring
-// pixels, kTimingRuns of them, in bands of rows at 1/6, 1/2 and 5/6 of the film's height (so
-// that the sky and the floor both count); together about as many samples as a pass of the grid.
-constexpr int kTimingPasses = 2;
-constexpr int kTimingRuns = 3;
-int timing_run_length(int width, int height, int items) {
-    return std::min(std::max(1, items / (kTimingRuns * kTimingPasses)), width * height);
-}
-int timing_samples(int width, int height, int items) { return kTimingRuns * timing_run_length(width, height, items); }
-
-// The seconds `r` takes for timing_samples(...) samples rendered as the
-// render's own passes render them, and added to a film as the render adds them. The sparse grid's
-// passes mistimed the candidates: their pixels lie k apart, which costs a path tracer coherence
-// (sky: 0.023 s per full pass from the grid, 0.018 in the render), and they hold 1/k^2 of a full
-// pass's light-image splats, whose adding on the host takes the render's cores too (sky, BDPT
-// without inner connections: 0.032 against 0.034 s). So the grid made that mix 1.39x pt's time
-// per pass, where the render takes 1.84x, and chose it on sky in 1 of 3 seeds, for 0.8x pt's
-// efficiency.
-double timing_pass_seconds(Renderer& r, uint32_t seed, int items, Film* film, RenderStats* stats) {
-    using Clock = std::chrono::steady_clock;
-    const int pixels = film->width * film->height, run = timing_run_length(film->width, film->height, items);
-    PassSpec pass;
-    pass.seed = pass.position_seed = seed;
-    double seconds = 0;
-    for (int b = 0; b < kTimingRuns; ++b) {
-        const int centre = int(int64_t(2 * b + 1) * pixels / (2 * kTimingRuns));
-        const int first = std::clamp(centre - run / 2, 0, pixels - run);
-        const Clock::time_point start = Clock::now();
-        const RenderedItems rendered = r.render_items(pass, first, run);
-        add_to_film(*film, rendered);
-        seconds += seconds_between(start, Clock::now());
-        stats->add_counts(rendered.counts);
-    }
-    return seconds;
-}
-
 uint64_t pilot_samples_at(int width, int height, int stride, size_t candidates) {
-    const int items = render_item_count(width, height, stride);
-    return (uint64_t(items) * kPilotPassesPerCandidate + uint64_t(kTimingPasses) * timing_samples(width, height, items)) *
-           candidates;
+    return uint64_t(render_item_count(width, height, stride)) * kPilotPassesPerCandidate * candidates;
 }
 
 // The sparse grid's stride when the render's samples do not limit it: about kPilotItems pixels.
@@ -97,19 +57,9 @@ int pilot_stride(int width, int height, int spp, size_t candidates) {
 constexpr double kFullGridBudgetSeconds = 10.0;
 
 // The sparse grid's values of one pilot pass: per grid pixel (the pass's work item), the camera
-// sample's rgb, and the light image's rgb summed over the item's whole k x k block. The grid alone is kept, so the pilot's memory
+// sample's rgb and the light image's rgb there. The grid alone is kept, so the pilot's memory
 // and time do not grow with the film: with a full film per pass (twelve), a 2048^2 render's
 // pilot took 7.8 s and the process peaked at 3.3 GB; with the grid, 0.32 s and 0.39 GB.
-//
-// Why the block, not the grid pixel: a sparse pass traces the light subpaths of one pixel per
-// block, 1/k^2 of a full pass's, and their splats land anywhere. Counting only those that land
-// on grid pixels kept 1/k^2 of them, too few to see a light image's rare bright splats (glossy
-// reflections of small lights), whose variance then came out low far more often than high:
-// on veach-mis (k = 5) the pilot put BDPT without inner connections at 0.47-0.70x pt's
-// transport variance in 5 of 6 seeds, and chose it in 2, where its images had 1.1-1.5x pt's
-// squared error at 1.9x the time. The splats of a block's k^2 pixels, from as many light
-// subpaths as the pass traced, estimate the mean of those pixels' light-image variances
-// (block_light_scale) from k^2 times the splats.
 struct GridPass {
     int columns = 0, rows = 0, stride = 1, width = 0, height = 0;
     std::vector<double> camera, light;
@@ -118,13 +68,6 @@ struct GridPass {
         : columns((w + k - 1) / k), rows((h + k - 1) / k), stride(k), width(w), height(h),
           camera(size_t(columns) * rows * 3), light(size_t(columns) * rows * 3) {}
     int items() const { return columns * rows; }
-    // The item whose block holds `pixel`.
-    int block_item(int pixel) const { return (pixel / width / stride) * columns + (pixel % width) / stride; }
-    // Pixels in item's block (fewer at the film's right and bottom edges).
-    int block_pixels(int item) const {
-        const int x = (item % columns) * stride, y = (item / columns) * stride;
-        return std::min(stride, width - x) * std::min(stride, height - y);
-    }
     // Another pass of the same grid, pixel by pixel (a set's sum).
     void add(const GridPass& other) {
         for (size_t v = 0; v < camera.size(); ++v) camera[v] += other.camera[v], light[v] += other.light[v];
@@ -140,10 +83,11 @@ struct GridPass {
             for (int c = 0; c < 3; ++c) camera[size_t(r.first_item + i) * 3 + c] += r.camera[size_t(i) * 3 + c];
         }
         for (const SplatRecord& s : r.splats) {
-            const size_t item = size_t(block_item(s.pixel));
-            light[item * 3] += s.r;
-            light[item * 3 + 1] += s.g;
-            light[item * 3 + 2] += s.b;
+            const int item = render_pixel_item(s.pixel, width, height, stride);
+            if (item < 0) continue;
+            light[size_t(item) * 3] += s.r;
+            light[size_t(item) * 3 + 1] += s.g;
+            light[size_t(item) * 3 + 2] += s.b;
         }
     }
 };
@@ -152,7 +96,7 @@ struct GridPass {
 // into kVarianceGroups interleaved groups of pixels (the grid's pixel number modulo the group
 // count, so that each group spans the whole image). A group's mean is the variance of one
 // full-density sample. The light image of a sparse pass holds the light subpaths of 1/share of
-// the pixels, so a full pass's light-image variance is share times the sparse pass's.
+// the pixels, so its variance is share times that of a full pass.
 constexpr int kVarianceGroups = 8;
 struct GroupedVariance {
     double sum[kVarianceGroups] = {};
@@ -184,22 +128,17 @@ struct GroupedVariance {
 };
 
 // At one grid pixel, half the squared difference of a and b (each scaled by `scale`: 1/n for
-// the sums of sets of n passes), summed over the channels; the light image's part is its block's
-// (GridPass), per pixel of the block and times light_share (see GroupedVariance). *camera_part,
-// if given, gets the camera image's part of the term.
-double difference_term(const GridPass& a, const GridPass& b, int item, double scale, double light_share,
-                       double* camera_part = nullptr) {
-    double camera = 0, light = 0;
-    const double block_light_scale = light_share / a.block_pixels(item);
+// the sums of sets of n passes), summed over the channels, the light image's part times
+// light_share (see GroupedVariance).
+double difference_term(const GridPass& a, const GridPass& b, int item, double scale, double light_share) {
+    double term = 0;
     for (int c = 0; c < 3; ++c) {
         const size_t i = size_t(item) * 3 + size_t(c);
         const double dc = scale * (a.camera[i] - b.camera[i]);
         const double dl = scale * (a.light[i] - b.light[i]);
-        camera += 0.5 * dc * dc;
-        light += 0.5 * dl * dl * block_light_scale;
+        term += 0.5 * (dc * dc + dl * dl * light_share);
     }
-    if (camera_part) *camera_part = camera;
-    return camera + light;
+    return term;
 }
 
 GroupedVariance one_sample_variance(const GridPass& a, const GridPass& b, double light_share) {
@@ -216,9 +155,6 @@ GroupedVariance one_sample_variance(const GridPass& a, const GridPass& b, double
 struct SetVariances {
     GroupedVariance one, set;
     std::vector<double> one_terms;  // `one`'s term of each grid pixel
-    // Per grid pixel: the camera image's part of one_terms, and the second largest of its n
-    // pairs' camera parts (what adaptive sampling's plan would see there; see predict_candidates).
-    std::vector<double> camera_terms, camera_u;
 };
 SetVariances set_variances(const std::vector<GridPass>& passes, int n, double light_share) {
     const GridPass* x = passes.data();
@@ -230,22 +166,10 @@ SetVariances set_variances(const std::vector<GridPass>& passes, int n, double li
     }
     SetVariances v;
     for (int item = 0; item < x_sum.items(); ++item) {
-        double one = 0, camera = 0, first = 0, second = 0;
-        for (int j = 0; j < n; ++j) {
-            double pair_camera;
-            one += difference_term(x[j], y[j], item, 1.0, light_share, &pair_camera);
-            camera += pair_camera;
-            if (pair_camera > first) {
-                second = first;
-                first = pair_camera;
-            } else if (pair_camera > second) {
-                second = pair_camera;
-            }
-        }
+        double one = 0;
+        for (int j = 0; j < n; ++j) one += difference_term(x[j], y[j], item, 1.0, light_share);
         v.one.add(item, one / n);
         v.one_terms.push_back(one / n);
-        v.camera_terms.push_back(camera / n);
-        v.camera_u.push_back(second);
         v.set.add(item, n * difference_term(x_sum, y_sum, item, 1.0 / n, light_share));
     }
     return v;
@@ -388,107 +312,8 @@ std::vector<double> shared_tail_terms(const std::vector<const std::vector<double
     return shared;
 }
 
-namespace {
-
-// Adaptive sampling's plan (render/adaptive.h) as the pilot can foresee it: per grid pixel the
-// tier k (spp x 2^k samples in all) for a pixel whose plan sees u, with u_mean doubled until the
-// extra samples fit max_extra_share of the render's; returns their share.
-double foreseen_adaptive_tiers(const std::vector<double>& u, std::vector<int>* tier) {
-    constexpr int kMaxTier = 4;          // plan_adaptive_samples' defaults
-    constexpr double kMaxExtraShare = 1.0;
-    tier->assign(u.size(), 0);
-    double u_mean = 0;
-    for (double v : u) u_mean += v;
-    u_mean /= double(std::max<size_t>(1, u.size()));
-    if (!(u_mean > 0)) return 0;
-    for (;;) {
-        double extra = 0;
-        for (size_t p = 0; p < u.size(); ++p) {
-            int k = 0;
-            for (double threshold = 4 * u_mean; k < kMaxTier && u[p] >= threshold; threshold *= 4) ++k;
-            (*tier)[p] = k;
-            extra += double((1 << k) - 1);
-        }
-        extra /= double(u.size());
-        if (extra <= kMaxExtraShare) return extra;
-        u_mean *= 2;
-    }
-}
-
-// Each candidate's predicted error and efficiency (StrategyCandidate) from its tally, for a
-// render of `spp` samples per pixel or, with time_budget > 0, of that many seconds, followed by
-// adaptive sampling where `adaptive_sampling` says so.
-void predict_candidates(const std::vector<SetVariances>& transport, const std::vector<GroupedVariance>& whole,
-                        const std::vector<double>& seconds, int items, double full_per_sparse, int spp,
-                        double time_budget, bool adaptive_sampling, std::vector<StrategyCandidate>* candidates) {
-    const size_t k = transport.size();
-    std::vector<const std::vector<double>*> camera_terms;
-    for (size_t i = 0; i < k; ++i)
-        if ((*candidates)[i].integrator != Integrator::Lt) camera_terms.push_back(&transport[i].one_terms);
-    const std::vector<double> shared_tail = shared_tail_terms(camera_terms);
-    for (size_t i = 0; i < k; ++i) {
-        StrategyCandidate& c = (*candidates)[i];
-        const SetVariances& t = transport[i];
-        c.variance_transport = t.one.mean();
-        c.variance_transport_standard_error = t.one.standard_error();
-        // N x (variance of N samples' mean) = A + B / N: B is what stratification removes
-        // faster than 1/N. From N = 1 and N = kPilotSetSize.
-        const double n_set = kPilotSetSize;
-        c.variance_transport_stratified =
-            std::min(c.variance_transport, median_group_difference(t.one, t.set) * n_set / (n_set - 1.0));
-        // lt's terms were not compared (it has no camera subpath): it keeps them all.
-        const bool camera_candidate = c.integrator != Integrator::Lt;
-        GroupedVariance own;
-        for (int item = 0; item < items; ++item)
-            own.add(item, t.one_terms[size_t(item)] - (camera_candidate ? shared_tail[size_t(item)] : 0.0));
-        c.variance_shared_tail = c.variance_transport - own.mean();
-        // Adaptive sampling gives the pixels whose neighbours' camera samples vary most 2^k
-        // times the samples, which divides their camera image's variance by 2^k and leaves the
-        // light image's as it is (render/adaptive.h). Where a candidate's error sits in a few
-        // such pixels, that changes which candidate is best: on cornell-specular at 64 spp it
-        // took pt's squared error from 6.1e-4 to 4.7e-4 and BDPT without inner connections' from
-        // 2.2e-4 to 1.1e-4, the mix's caustics seen through the mirror. The pilot foresees the plan from each grid pixel's second largest camera pair
-        // term, as the plan takes the second largest of a pixel's neighbours: a lone firefly
-        // does not make a pixel's plan, so the pilot does not credit refinement with removing one.
-        GroupedVariance refined = own;
-        c.predicted_extra_share = 0;
-        if (adaptive_sampling && camera_candidate) {
-            std::vector<int> tier;
-            c.predicted_extra_share = foreseen_adaptive_tiers(t.camera_u, &tier);
-            refined = GroupedVariance();
-            for (int item = 0; item < items; ++item) {
-                const size_t p = size_t(item);
-                const double light = std::max(0.0, t.one_terms[p] - t.camera_terms[p]);
-                const double own_camera = std::max(0.0, t.camera_terms[p] - shared_tail[p]);
-                refined.add(item, own_camera / double(1 << tier[p]) + light);
-            }
-        }
-        c.variance_pixel = pixel_variance(whole[i], t.one);
-        c.seconds_per_pass = seconds[i] * full_per_sparse;
-        const double n = time_budget > 0 && c.seconds_per_pass > 0 ? std::max(1.0, time_budget / c.seconds_per_pass)
-                                                                    : double(std::max(spp, 1));
-        c.predicted_spp = n;
-        // Heavy tails (a path tracer's fireflies in fog) make a sparse grid's variance come out
-        // low more often than high, and a candidate chosen for a variance it does not have can
-        // cost 25x (without this, fog-spot at 128x128 got pt, 0.04-0.07x of bdpt's efficiency
-        // there, in one of three pilots); so the part of each transport variance that falls as
-        // 1/N (less the shared tail) counts kRiskStandardErrors standard errors high.
-        const double risky_transport = std::max(0.0, refined.mean() - c.variance_transport_stratified) +
-                                       kRiskStandardErrors * refined.standard_error();
-        const double transport_mse = risky_transport / n + c.variance_transport_stratified / (n * n);
-        c.predicted_mse = transport_mse + c.variance_pixel / std::pow(n, kPixelVarianceExponent);
-        const double seconds = n * c.seconds_per_pass * (1.0 + c.predicted_extra_share);
-        const double cost = c.predicted_mse * seconds;
-        c.efficiency = cost > 0 ? 1.0 / cost : 0.0;
-        const double transport_cost = transport_mse * seconds;
-        c.efficiency_transport_only = transport_cost > 0 ? 1.0 / transport_cost : 0.0;
-    }
-}
-
-}  // namespace
-
 StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene, const RenderOptions& options,
-                                 int spp, double time_budget, bool adaptive_sampling, RenderStats* stats) {
+                                 int spp, double time_budget, RenderStats* stats) {
     using Clock = std::chrono::steady_clock;
     StrategyPilot pilot;
     pilot.candidates = strategy_candidates(light_tracing_is_a_candidate(scene));
@@ -522,55 +347,84 @@ StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene
                    seed_c = options.seed ^ 0x3c6ef372u;
     std::vector<std::vector<GridPass>> passes(size_t(k), std::vector<GridPass>(kPilotPassesPerCandidate,
                                                                             GridPass(width, height, pilot.pixel_stride)));
-    for (int p = 0; p < kPilotPassesPerCandidate; ++p)
+    // Each candidate's fastest pass: load from elsewhere (the image I/O process loads its
+    // libraries during the pilot) and a first pass's one-off costs only ever add time, and a
+    // pass lasts 5-50 ms. With the mean of the three, a slow pass of full bdpt once handed
+    // lamp-ceiling to the mix without inner connections, and a slow pass of pt handed sky to bdpt.
+    std::vector<double> seconds(size_t(k), 1e300);
+    for (int round = 0; round < kPilotPassesPerCandidate; ++round)
         for (int i = 0; i < k; ++i) {
             const StrategyCandidate& c = pilot.candidates[size_t(i)];
             Renderer* r = by_integrator[int(c.integrator)];
             if (c.integrator == Integrator::Bdpt) r->set_strategy_mix(c.light_subpaths, c.inner_connections);
             PassSpec pass;
             pass.pixel_stride = pilot.pixel_stride;
-            if (p < 2 * kPilotSetSize) {
+            if (round < 2 * kPilotSetSize) {
                 // Sample j of set x or y: the sampler's j-th sample, so that a set is stratified
                 // as kPilotSetSize samples of the render are.
-                const uint32_t j = uint32_t(p % kPilotSetSize);
-                pass.seed = p < kPilotSetSize ? seed_x : seed_y;
+                const uint32_t j = uint32_t(round % kPilotSetSize);
+                pass.seed = round < kPilotSetSize ? seed_x : seed_y;
                 pass.sample_index = pass.position_sample_index = j;
                 pass.position_seed = seed_x;
             } else {
                 pass.seed = pass.position_seed = seed_c;
             }
+            const Clock::time_point pass_start = Clock::now();
             const RenderedItems rendered = r->render_items(pass, 0, items);
-            passes[size_t(i)][size_t(p)].add(rendered);
+            seconds[size_t(i)] = std::min(seconds[size_t(i)], seconds_between(pass_start, Clock::now()));
+            passes[size_t(i)][size_t(round)].add(rendered);
             stats->add_counts(rendered.counts);
         }
 
-    // Each candidate's speed, from kTimingPasses passes of the render's own kind
-    // (timing_pass_seconds), round robin; its fastest counts: load from elsewhere (the image I/O
-    // process loads its libraries during the pilot) and a first pass's one-off costs only ever
-    // add time. With the mean of the grid's passes, a slow pass of full bdpt once handed
-    // lamp-ceiling to the mix without inner connections, and a slow pass of pt handed sky to bdpt.
-    Film timing_film(width, height);
-    std::vector<double> seconds(size_t(k), 1e300);
-    for (int round = 0; round < kTimingPasses; ++round)
-        for (int i = 0; i < k; ++i) {
-            const StrategyCandidate& c = pilot.candidates[size_t(i)];
-            Renderer* r = by_integrator[int(c.integrator)];
-            if (c.integrator == Integrator::Bdpt) r->set_strategy_mix(c.light_subpaths, c.inner_connections);
-            const double s = timing_pass_seconds(*r, seed_c ^ uint32_t(0x510e527f + round), items, &timing_film, stats);
-            seconds[size_t(i)] =
-                std::min(seconds[size_t(i)], s * double(items) / double(timing_samples(width, height, items)));
-        }
-
     std::vector<SetVariances> transport;
-    std::vector<GroupedVariance> whole;
+    for (int i = 0; i < k; ++i) transport.push_back(set_variances(passes[size_t(i)], kPilotSetSize, full_per_sparse));
+    std::vector<const std::vector<double>*> camera_terms;
+    for (int i = 0; i < k; ++i)
+        if (pilot.candidates[size_t(i)].integrator != Integrator::Lt)
+            camera_terms.push_back(&transport[size_t(i)].one_terms);
+    const std::vector<double> shared_tail = shared_tail_terms(camera_terms);
+
     for (int i = 0; i < k; ++i) {
-        transport.push_back(set_variances(passes[size_t(i)], kPilotSetSize, full_per_sparse));
-        whole.push_back(one_sample_variance(passes[size_t(i)][0], passes[size_t(i)][2 * kPilotSetSize], full_per_sparse));
+        StrategyCandidate& c = pilot.candidates[size_t(i)];
+        const std::vector<GridPass>& f = passes[size_t(i)];
+        const SetVariances& t = transport[size_t(i)];
+        const GroupedVariance whole = one_sample_variance(f[0], f[2 * kPilotSetSize], full_per_sparse);
+        c.variance_transport = t.one.mean();
+        c.variance_transport_standard_error = t.one.standard_error();
+        // N x (variance of N samples' mean) = A + B / N: B is what stratification removes
+        // faster than 1/N. From N = 1 and N = kPilotSetSize.
+        const double n_set = kPilotSetSize;
+        c.variance_transport_stratified =
+            std::min(c.variance_transport, median_group_difference(t.one, t.set) * n_set / (n_set - 1.0));
+        // lt's terms were not compared (it has no camera subpath): it keeps them all.
+        GroupedVariance own = t.one;
+        if (c.integrator != Integrator::Lt) {
+            own = GroupedVariance();
+            for (int item = 0; item < items; ++item)
+                own.add(item, t.one_terms[size_t(item)] - shared_tail[size_t(item)]);
+        }
+        c.variance_shared_tail = c.variance_transport - own.mean();
+        c.variance_pixel = pixel_variance(whole, t.one);
+        c.seconds_per_pass = seconds[size_t(i)] * full_per_sparse;
+        const double n = time_budget > 0 && c.seconds_per_pass > 0 ? std::max(1.0, time_budget / c.seconds_per_pass)
+                                                                    : double(std::max(spp, 1));
+        c.predicted_spp = n;
+        // Heavy tails (a path tracer's fireflies in fog) make a sparse grid's variance come out
+        // low more often than high, and a candidate chosen for a variance it does not have can
+        // cost 25x (without this, fog-spot at 128x128 got pt, 0.04-0.07x of bdpt's efficiency
+        // there, in one of three pilots); so the part of each transport variance that falls as
+        // 1/N (less the shared tail) counts kRiskStandardErrors standard errors high.
+        const double risky_transport = std::max(0.0, own.mean() - c.variance_transport_stratified) +
+                                       kRiskStandardErrors * own.standard_error();
+        const double transport_mse = risky_transport / n + c.variance_transport_stratified / (n * n);
+        c.predicted_mse = transport_mse + c.variance_pixel / std::pow(n, kPixelVarianceExponent);
+        const double cost = c.predicted_mse * n * c.seconds_per_pass;
+        c.efficiency = cost > 0 ? 1.0 / cost : 0.0;
+        const double transport_cost = transport_mse * n * c.seconds_per_pass;
+        c.efficiency_transport_only = transport_cost > 0 ? 1.0 / transport_cost : 0.0;
     }
-    predict_candidates(transport, whole, seconds, items, full_per_sparse, spp, time_budget, adaptive_sampling,
-                       &pilot.candidates);
     pilot.chosen = choose_strategy_candidate(pilot.candidates);
-    pilot.samples = pilot_samples_at(width, height, pilot.pixel_stride, size_t(k));
+    pilot.samples = uint64_t(items) * kPilotPassesPerCandidate * k;
     // The renderers' counters (build time, profile; the passes' samples and rays went to `stats`
     // above) move into `stats`, so a renderer that goes on to the main render does not count the
     // pilot twice.

@@ -27,16 +27,12 @@
 // spp, the model predicts the squared error at 64 spp within 12-32%, where one sample's
 // variance / N overstates it 2.3x for pt and 4.6x for BDPT without inner connections. So the
 // squared error of N samples is predicted as A / N + B / N^2 + v_pixel / N^1.5, and the
-// candidate with the least error times time is chosen: the inverse of Grittmann et al.'s
-// efficiency. A leaves out the samples that every camera candidate has alike
-// (shared_tail_terms) and counts two standard errors high, so that a candidate whose fireflies
-// the grid happened to miss is not chosen for them. The light image (t = 1) of a sparse pass
-// holds only the sparse pixels' light subpaths; its variance is taken over each grid pixel's
-// whole k x k block and scaled to a full pass. Where adaptive sampling follows the render's
-// passes, A is what remains after the extra samples the pilot foresees (predict_candidates).
-// The time is N x seconds per pass, from each candidate's faster of two timing passes of
-// neighbouring pixels, as the render's passes are (the grid's scattered pixels mistime them),
-// plus the foreseen extra samples.
+// candidate with the least error times time (N x seconds per sample, from its fastest pass) is
+// chosen: the inverse of Grittmann et al.'s efficiency. A leaves out the samples that every
+// camera candidate has alike (shared_tail_terms) and counts two standard errors high, so that a
+// candidate whose fireflies the grid happened to miss is not chosen for them. The light image
+// (t = 1) of a sparse pass holds only the sparse pixels' light subpaths; its variance is scaled
+// to a full pass.
 #pragma once
 
 #include <cstdint>
@@ -66,9 +62,7 @@ struct StrategyCandidate {
     double variance_pixel = 0;
     double seconds_per_pass = 0;    // a full pass, scaled from the sparse ones
     double predicted_spp = 0;       // what the render will reach (given, or from a time budget)
-    double predicted_mse = 0;       // of the image at predicted_spp (after adaptive sampling, if any)
-    // Adaptive sampling's extra samples the pilot foresees, as a share of the render's.
-    double predicted_extra_share = 0;
+    double predicted_mse = 0;       // of the image at predicted_spp
     // 1 / (predicted squared error x render seconds); 0 when the image is black.
     double efficiency = 0;
     // The same with v_pixel taken as 0: the most a camera candidate can be credited with (lt is
@@ -160,6 +154,6 @@ std::vector<double> shared_tail_terms(const std::vector<const std::vector<double
 // with stratification modelled, 4.85x before), but not the light image's (lt: within 3-16% on
 // lamp-ceiling).
 StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene, const RenderOptions& options,
-                                 int spp, double time_budget, bool adaptive_sampling, RenderStats* stats);
+                                 int spp, double time_budget, RenderStats* stats);
 
 }  // namespace clbdpt
