@@ -646,18 +646,29 @@ TEST(HardCases, NonFiniteSampleThrowsOrIsDropped) {
         }
     }
     options.drop_non_finite = true;
-    Renderer renderer(test_device(), scene, options);
-    Film film(kFilm, kFilm);
-    ASSERT_NO_THROW(renderer.render_passes(film, 0, 2));
-    EXPECT_EQ(renderer.stats().dropped_samples, 1u);
-    ASSERT_EQ(renderer.stats().first_dropped.size(), 1u);
-    const DroppedSample& d = renderer.stats().first_dropped[0];
-    EXPECT_EQ(d.x, kFilm / 2);
-    EXPECT_EQ(d.y, kFilm / 2);
-    EXPECT_EQ(d.sample, 0u);
-    EXPECT_GE(d.t, 1);
-    EXPECT_GE(d.s, 0);
-    for (float v : film.image()) ASSERT_TRUE(std::isfinite(v));
+    Film one_thread_film(kFilm, kFilm);
+    // Collected by one host thread (a CPU device's way) and by three (a GPU's): the same.
+    for (int threads : {1, 3}) {
+        options.collect_threads = threads;
+        Renderer renderer(test_device(), scene, options);
+        Film film(kFilm, kFilm);
+        ASSERT_NO_THROW(renderer.render_passes(film, 0, 2));
+        EXPECT_EQ(renderer.stats().dropped_samples, 1u);
+        ASSERT_EQ(renderer.stats().first_dropped.size(), 1u);
+        const DroppedSample& d = renderer.stats().first_dropped[0];
+        EXPECT_EQ(d.x, kFilm / 2);
+        EXPECT_EQ(d.y, kFilm / 2);
+        EXPECT_EQ(d.sample, 0u);
+        EXPECT_GE(d.t, 1);
+        EXPECT_GE(d.s, 0);
+        for (float v : film.image()) ASSERT_TRUE(std::isfinite(v));
+        if (threads == 1) {
+            one_thread_film = film;
+        } else {
+            EXPECT_EQ(film.camera_sum, one_thread_film.camera_sum);
+            EXPECT_EQ(film.light_sum, one_thread_film.light_sum);
+        }
+    }
 }
 
 // ---- Long paths ---------------------------------------------------------------------------

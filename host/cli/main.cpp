@@ -67,6 +67,7 @@ struct RenderArgs {
     int debug_nan_pixel = -1;  // hidden: tests of the dropped-sample path
     std::string debug_fail_device;  // hidden: "K:N", device K's launches fail after N
     int batch_items = 0;            // hidden: work items per launch at most
+    int collect_threads = 0;        // hidden: host threads collecting a launch (benchmarks)
     std::string checkpoint;         // --checkpoint FILE
     double checkpoint_every = 60;   // seconds
     std::string resume;             // --resume FILE
@@ -323,6 +324,7 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
     options.pt_from_subpaths = args.debug_pt_from_subpaths;
     options.all_features = args.all_features;
     options.local_size = args.local_size;
+    options.collect_threads = args.collect_threads;
     options.batch_items = args.batch_items;
     if (!args.strategy_images.empty())
         options.strategy_images = args.unweighted ? RenderOptions::StrategyImages::Unweighted
@@ -799,6 +801,7 @@ int main(int argc, char** argv) {
     // Tests only: device K's launches fail after N launches; work items per launch at most.
     render->add_option("--debug-fail-device", args.debug_fail_device)->group("");
     render->add_option("--batch-items", args.batch_items)->group("")->check(CLI::PositiveNumber);
+    render->add_option("--collect-threads", args.collect_threads)->group("")->check(CLI::PositiveNumber);
     // Tests only: under mpirun, process R ends abruptly after rendering N runs.
     render->add_option("--debug-exit-process", args.debug_exit_process)->group("");
     // Benchmarks only: device K runs F times slower (it waits after each launch).

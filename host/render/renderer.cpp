@@ -30,6 +30,12 @@ constexpr double kMaxLaunchSeconds = 0.25;
 // ... but launches no smaller than this many work-groups, which keep a device busy.
 constexpr int kMinLaunchGroups = 64;
 
+// A GPU's launch is collected by up to this many host threads (collect), each taking at least
+// kMinItemsPerCollectThread items; a CPU device's by its worker thread alone, as PoCL's threads
+// use every core.
+constexpr int kMaxCollectThreads = 8;
+constexpr int kMinItemsPerCollectThread = 16384;
+
 // render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, camera_out, splats)
 constexpr cl_uint kParamsArg = SceneBuffers::kSceneArgCount;
 
@@ -49,6 +55,10 @@ Renderer::Renderer(DeviceContext& device, const DeviceScene& scene, const Render
         zsobol_base4_digits_ = log2_resolution + (zsobol_log2_spp_ + 1) / 2;
     }
     local_size_ = options.local_size > 0 ? options.local_size : (device.entry().type == "CPU" ? kCpuLocalSize : 0);
+    collect_threads_ = options.collect_threads > 0 ? options.collect_threads
+                       : device.entry().type == "CPU"
+                           ? 1
+                           : std::clamp(int(std::thread::hardware_concurrency()) / 2, 1, kMaxCollectThreads);
     stats_.defines = kernel_defines(scene, options.integrator, options.max_depth, options.all_features, options.sampler,
                                     options.light_sampling);
     if (options.strategy_images != RenderOptions::StrategyImages::Off) {
@@ -76,7 +86,12 @@ Renderer::Renderer(DeviceContext& device, const DeviceScene& scene, const Render
         const int pixels = scene.camera.width * scene.camera.height;
         const size_t slot_bytes = kMaxBatchBytes / std::size(slots_);
         size_t limit = std::min<size_t>(slot_bytes, device.entry().max_alloc) / bytes_per_item;
-        batch_items_ = int(std::min<size_t>({size_t(pixels), size_t(kMaxBatchItems), limit}));
+        // A GPU fills only with many items in flight, so its launches may span several passes
+        // (DeviceWorker joins runs of passes; a 256 x 256 pass is 65 536 items). A CPU
+        // device's stay within one pass: it is full with far fewer, and small images keep
+        // small buffers.
+        const size_t wanted = device.entry().type == "CPU" ? size_t(pixels) : size_t(kMaxBatchItems);
+        batch_items_ = int(std::min<size_t>({wanted, size_t(kMaxBatchItems), limit}));
         if (options.batch_items > 0) batch_items_ = std::min(batch_items_, options.batch_items);
         batch_items_ = std::max(batch_items_, 1);
         launch_items_ = batch_items_;
@@ -229,12 +244,12 @@ void Renderer::finish_launch(RenderedItems& out, const PassSpec& pass, const InF
 }
 
 void Renderer::drop_sample(RenderedItems& out, const LaunchSlot& slot, int item, int pixel,
-                           const PassSpec& pass) const {
+                           uint32_t sample_index) const {
     const cl_float4& c = slot.camera_host[size_t(item)];
     DroppedSample d;
     d.x = pixel % scene_.camera.width;
     d.y = pixel / scene_.camera.width;
-    d.sample = pass.sample_index;
+    d.sample = sample_index;
     if (c.s[3] < 0) {
         const int strategy = int(-1.0f - c.s[3]), stride = options_.max_depth + 3;
         d.s = strategy / stride;
@@ -249,34 +264,30 @@ void Renderer::drop_sample(RenderedItems& out, const LaunchSlot& slot, int item,
     if (out.counts.first_dropped.size() < ItemCounts::kFirstDropped) out.counts.first_dropped.push_back(d);
 }
 
-void Renderer::collect(RenderedItems& out, const PassSpec& pass, const LaunchSlot& slot, int first_item,
-                       int item_count) const {
-    // Item i of this launch is item first_item - out.first_item + i of `out`. One pass over the
-    // outputs, pointers stepping along: on a GPU this loop is what the device waits for.
-    const int offset = first_item - out.first_item;
-    const cl_float4* camera = slot.camera_host.data();
-    const SplatRecord* splats = slot.splats_host.data();
-    float* dst = &out.camera[size_t(offset) * 3];
+void Renderer::collect_range(CollectedRange& range, float* camera_dst, const LaunchSlot& slot, int begin,
+                             int end) const {
+    // One pass over the outputs, pointers stepping along: on a GPU this loop is what the
+    // device waits for.
+    const cl_float4* camera = slot.camera_host.data() + begin;
+    const SplatRecord* splats = slot.splats_host.data() + size_t(begin) * splat_slots_;
+    float* dst = camera_dst + size_t(begin) * 3;
     uint64_t rays = 0;
-    for (int i = 0; i < item_count; ++i, dst += 3, splats += splat_slots_) {
-        const float* c = camera[i].s;
+    for (int i = begin; i < end; ++i, ++camera, dst += 3, splats += splat_slots_) {
+        const float* c = camera->s;
         // A non-finite value is a bug: the kernel names the first strategy that gave one in w
         // (cl/kernels/render.cl), and a sum that overflowed is caught here. The item's splats go
         // in as they are checked, and come out again if one is not finite.
-        const size_t splats_before = out.splats.size();
+        const size_t splats_before = range.splats.size();
         bool finite = c[3] >= 0 && std::isfinite(c[0]) && std::isfinite(c[1]) && std::isfinite(c[2]);
         for (int k = 0; k < splat_slots_ && finite; ++k) {
             const SplatRecord& r = splats[k];
             if (r.pixel < 0) continue;
             finite = std::isfinite(r.r) && std::isfinite(r.g) && std::isfinite(r.b);
-            out.splats.push_back(r);
+            range.splats.push_back(r);
         }
         if (!finite) {
-            out.splats.resize(splats_before);
-            const int pixel = launch_item_pixel(first_item + i, scene_.camera.width, scene_.camera.height,
-                                                pass.pixel_stride, pass.run_pixel, pass.run_length);
-            drop_sample(out, slot, i, pixel, pass);
-            out.dropped_items.push_back(offset + i);
+            range.splats.resize(splats_before);
+            range.dropped.push_back(i);
             continue;
         }
         dst[0] = c[0];
@@ -284,7 +295,47 @@ void Renderer::collect(RenderedItems& out, const PassSpec& pass, const LaunchSlo
         dst[2] = c[2];
         rays += uint32_t(c[3]);  // a whole number of rays, far below 2^24
     }
-    out.counts.rays += rays;
+    range.rays = rays;
+}
+
+void Renderer::collect(RenderedItems& out, const PassSpec& pass, const LaunchSlot& slot, int first_item,
+                       int item_count) const {
+    // Item i of this launch is item first_item - out.first_item + i of `out`.
+    const int offset = first_item - out.first_item;
+    float* camera_dst = &out.camera[size_t(offset) * 3];
+    // Ranges of the launch's items are collected by threads of their own where there are
+    // several (a GPU's launches; a CPU device's cores are busy rendering), each into its own
+    // splat list; the lists are joined in item order, so the result does not depend on it.
+    const int min_items = options_.collect_threads > 0 ? 1 : kMinItemsPerCollectThread;  // as asked (tests)
+    const int threads = std::min(collect_threads_, std::max(1, item_count / min_items));
+    std::vector<CollectedRange> ranges(static_cast<size_t>(threads));
+    if (threads == 1) {
+        ranges[0].splats.swap(out.splats);  // appended to in place
+        collect_range(ranges[0], camera_dst, slot, 0, item_count);
+        ranges[0].splats.swap(out.splats);
+    } else {
+        std::vector<std::thread> workers;
+        for (int t = 0; t < threads; ++t) {
+            const int begin = int(int64_t(item_count) * t / threads), end = int(int64_t(item_count) * (t + 1) / threads);
+            if (splat_slots_ > 0) ranges[size_t(t)].splats.reserve(size_t(end - begin) * std::min(splat_slots_, 4));
+            workers.emplace_back(
+                [&, t, begin, end] { collect_range(ranges[size_t(t)], camera_dst, slot, begin, end); });
+        }
+        for (std::thread& w : workers) w.join();
+        for (const CollectedRange& r : ranges) out.splats.insert(out.splats.end(), r.splats.begin(), r.splats.end());
+    }
+    for (const CollectedRange& r : ranges) {
+        out.counts.rays += r.rays;
+        for (int i : r.dropped) {
+            const int run_item = first_item + i;
+            const int pixel = launch_item_pixel(run_item, scene_.camera.width, scene_.camera.height,
+                                                pass.pixel_stride, pass.run_pixel, pass.run_length);
+            // A run's items go through its pixels once per sample (PassSpec::run_length).
+            const uint32_t run_sample = pass.run_length > 0 ? uint32_t(run_item / pass.run_length) : 0u;
+            drop_sample(out, slot, i, pixel, pass.sample_index + run_sample);
+            out.dropped_items.push_back(offset + i);
+        }
+    }
     if (strategy_slots_ > 0) {
         auto dropped = std::lower_bound(out.dropped_items.begin(), out.dropped_items.end(), offset);
         for (int i = 0; i < item_count; ++i) {

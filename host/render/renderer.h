@@ -38,6 +38,7 @@ struct RenderOptions {
     bool all_features = false;  // build the unspecialised kernel
     int batch_items = 0;        // work items per launch; 0 = automatic
     int local_size = 0;         // work-group size; 0 = automatic (small on CPUs, the driver's choice elsewhere)
+    int collect_threads = 0;    // host threads that collect a launch's outputs; 0 = automatic (1 on CPUs)
     enum class StrategyImages { Off, Weighted, Unweighted };
     StrategyImages strategy_images = StrategyImages::Off;  // also record each (s, t) apart
     // A sample with a non-finite value (a bug) throws clbdpt::Error by default, so tests fail on
@@ -191,10 +192,20 @@ private:
     // collects its outputs into `out`.
     void finish_launch(RenderedItems& out, const PassSpec& pass, const InFlight& launch);
     void limit_launch_size(double seconds, int item_count);
+    // What collect_range gathered from a range of a launch's items: their splats in order, the
+    // items (launch indices) with a non-finite value, and the rays traced.
+    struct CollectedRange {
+        std::vector<SplatRecord> splats;
+        std::vector<int> dropped;
+        uint64_t rays = 0;
+    };
     void collect(RenderedItems& out, const PassSpec& pass, const LaunchSlot& slot, int first_item,
                  int item_count) const;
+    // Items [begin, end) of a launch: camera values to camera_dst (indexed by launch item), the
+    // rest to `range`.
+    void collect_range(CollectedRange& range, float* camera_dst, const LaunchSlot& slot, int begin, int end) const;
     // Counts a sample with a non-finite value and leaves it out, or throws (drop_non_finite off).
-    void drop_sample(RenderedItems& out, const LaunchSlot& slot, int item, int pixel, const PassSpec& pass) const;
+    void drop_sample(RenderedItems& out, const LaunchSlot& slot, int item, int pixel, uint32_t sample_index) const;
 
     DeviceContext& device_;
     const DeviceScene& scene_;
@@ -210,6 +221,7 @@ private:
     int launch_items_ = 0;  // work items per launch now (at most batch_items_)
     int launches_ = 0;
     int local_size_ = 0;  // 0 = the driver's choice
+    int collect_threads_ = 1;
     int zsobol_log2_spp_ = 0, zsobol_base4_digits_ = 0;
     int splat_slots_ = 0;
     int strategy_slots_ = 0;
