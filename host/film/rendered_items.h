@@ -62,6 +62,8 @@ struct RenderedItems {
 
 // Adds the items' values to the film's sums, in the order a single device rendering the whole
 // pass at once would (items in order; each item's splats in slot order). Does not change spp.
-void add_to_film(Film& film, const RenderedItems& items);
+// threads > 1: that many threads add bands of pixels, each pixel's values still in that order,
+// so the film is the same bit for bit.
+void add_to_film(Film& film, const RenderedItems& items, int threads = 1);
 
 }  // namespace clbdpt
