@@ -5,6 +5,8 @@
 
 #include <cmath>
 
+#include "render/render_loop.h"
+#include "render/work_units.h"
 #include "render_test_util.h"
 
 namespace clbdpt::test {
@@ -85,12 +87,25 @@ TEST_P(BatchingTest, ImageDoesNotDependOnBatching) {
     Renderer whole(test_device(), scene, options);
     Film a(40, 40);
     whole.render_passes(a, 0, 2);
-    options.batch_items = 333;  // does not divide the pixel count
+    options.batch_items = 333;    // does not divide the pixel count
+    options.collect_threads = 3;  // each launch collected in three ranges, as on a GPU
     Renderer batched(test_device(), scene, options);
     Film b(40, 40);
     batched.render_passes(b, 0, 2);
     EXPECT_EQ(a.camera_sum, b.camera_sum);
     EXPECT_EQ(a.light_sum, b.light_sum);
+    // Runs of several passes are rendered in one go (DeviceWorker), here a part of pass 0 and
+    // then its rest with all of pass 1, in launches that straddle the passes' boundary.
+    const WorkUnits units(40 * 40, 0, 512);
+    DeviceWorker worker(batched);
+    Film joined(40, 40);
+    for (const auto& [begin, end] : {std::pair<int64_t, int64_t>{0, 2}, {2, 2 * units.units_per_pass}}) {
+        const std::vector<RenderedItems> results = worker.render(units.runs(begin, end), {});
+        EXPECT_EQ(results.size(), 1u);
+        for (const RenderedItems& r : results) add_to_film(joined, r);
+    }
+    EXPECT_EQ(a.camera_sum, joined.camera_sum);
+    EXPECT_EQ(a.light_sum, joined.light_sum);
     // And a different seed gives a different image.
     options.seed = 7;
     Renderer reseeded(test_device(), scene, options);

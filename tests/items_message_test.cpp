@@ -17,6 +17,8 @@ RenderedItems sample_items() {
     r.sample_index = 7;
     r.first_item = 4096;
     r.item_count = 3;
+    r.run_pixel = 11;
+    r.run_length = 2;
     r.camera = {1.0f, -0.0f, std::numeric_limits<float>::denorm_min(), 3e38f, 0.1f, 2.5f, 0, 1, 2};
     r.dropped_items = {1};
     r.splats = {{0.25f, 0.5f, 1e-30f, 5}, {1, 2, 3, 9}};
@@ -44,6 +46,8 @@ TEST(ItemsMessage, RoundTripIsExact) {
     EXPECT_EQ(b.sample_index, a.sample_index);
     EXPECT_EQ(b.first_item, a.first_item);
     EXPECT_EQ(b.item_count, a.item_count);
+    EXPECT_EQ(b.run_pixel, a.run_pixel);
+    EXPECT_EQ(b.run_length, a.run_length);
     ASSERT_EQ(b.camera.size(), a.camera.size());
     EXPECT_EQ(std::memcmp(b.camera.data(), a.camera.data(), a.camera.size() * sizeof(float)), 0);
     EXPECT_EQ(b.dropped_items, a.dropped_items);

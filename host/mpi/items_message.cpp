@@ -83,6 +83,8 @@ std::vector<uint8_t> encode_results(const std::vector<RenderedItems>& results) {
         w.put(items.first_item);
         w.put(items.item_count);
         w.put(items.pixel_stride);
+        w.put(items.run_pixel);
+        w.put(items.run_length);
         w.put(items.strategy_slots);
         w.put(items.strategy_stride);
         w.put_vector(items.camera);
@@ -120,6 +122,8 @@ std::vector<RenderedItems> decode_results(const std::vector<uint8_t>& bytes) {
         items.first_item = r.get<int>();
         items.item_count = r.get<int>();
         items.pixel_stride = r.get<int>();
+        items.run_pixel = r.get<int>();
+        items.run_length = r.get<int>();
         items.strategy_slots = r.get<int>();
         items.strategy_stride = r.get<int>();
         items.camera = r.get_vector<float>();

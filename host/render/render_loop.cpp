@@ -25,13 +25,32 @@ std::string DeviceWorker::name() const { return renderer_.device().entry().name;
 
 std::vector<RenderedItems> DeviceWorker::render(const std::vector<ItemRun>& runs,
                                                 const std::function<bool()>& cancelled) {
+    // Runs of consecutive passes are rendered as one run through every pixel, many samples
+    // each (PassSpec::run_length), so that a device's launches are as wide as its batch and
+    // pipelined across the passes. At the bundled scenes' 256 x 256 a pass is one launch of
+    // 65 536 items: a GPU otherwise gets one small launch at a time and waits for the host
+    // between passes. The items keep their order, so the film is the same bit for bit.
+    const Camera& camera = renderer_.scene().camera;
+    const int pass_items = camera.width * camera.height;
     std::vector<RenderedItems> out;
-    for (const ItemRun& run : runs) {
+    for (size_t k = 0; k < runs.size();) {
         if (cancelled && cancelled()) break;
+        const ItemRun& first = runs[k];
+        int64_t items = first.item_count;
+        size_t n = 1;
+        for (; k + n < runs.size(); ++n) {
+            const ItemRun& next = runs[k + n];
+            const bool follows = next.pass == first.pass + n && next.first_item == 0 &&
+                                 int64_t(next.pass - first.pass) * pass_items - first.first_item == items;
+            if (!follows || items + next.item_count > kMaxMergedItems) break;
+            items += next.item_count;
+        }
         PassSpec pass;
-        pass.sample_index = pass.position_sample_index = run.pass;
+        pass.sample_index = pass.position_sample_index = first.pass;
         pass.seed = pass.position_seed = renderer_.options().seed;
-        out.push_back(renderer_.render_items(pass, run.first_item, run.item_count, cancelled));
+        if (n > 1) pass.run_length = pass_items;  // item i: pixel i % pass_items, pass + i / pass_items
+        out.push_back(renderer_.render_items(pass, first.first_item, int(items), cancelled));
+        k += n;
     }
     return out;
 }

@@ -58,6 +58,11 @@ public:
     std::vector<RenderedItems> render(const std::vector<ItemRun>& runs,
                                       const std::function<bool()>& cancelled) override;
 
+    // Items rendered in one go at most when runs of several passes are joined: the result's
+    // camera values (12 bytes an item, 24 MiB) stay below glibc's largest mmap threshold, so
+    // their memory is reused rather than mapped and faulted in afresh each time.
+    static constexpr int64_t kMaxMergedItems = int64_t(1) << 21;
+
 private:
     Renderer& renderer_;
 };

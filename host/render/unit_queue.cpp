@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <thread>
 
 namespace clbdpt {
 
@@ -22,7 +23,8 @@ UnitQueue::UnitQueue(const WorkUnits& units, Film* film, int passes, double budg
       rate_(size_t(workers), 0.0),
       shares_(size_t(workers)),
       workers_in_render_(workers),
-      workers_running_(workers) {
+      workers_running_(workers),
+      max_add_threads_(std::clamp(int(std::thread::hardware_concurrency()) / 2, 1, kMaxAddThreads)) {
     // A time-bound render has at least one pass, however small the budget.
     end_ = int64_t(timed_ ? 1 : std::max(passes, 0)) * units_.units_per_pass;
 }
@@ -42,11 +44,16 @@ std::optional<UnitQueue::Grab> UnitQueue::leave() {
     return std::nullopt;
 }
 
-void UnitQueue::extend_end() {
+void UnitQueue::extend_end(int worker) {
     if (stopped_) {
         end_ = std::min(end_, units_.pass_end(next_));
-    } else if (timed_ && next_ >= end_ && seconds_since_start() < budget_) {
-        end_ += units_.units_per_pass;
+    } else if (timed_ && seconds_since_start() < budget_) {
+        // While the budget lasts, the passes that this worker's next run (about kGrabSeconds of
+        // its work) reaches into start: a fast device's run spans several passes, which it
+        // renders in one go (DeviceWorker), as in a render of a given spp.
+        const double rate = rate_[size_t(worker)];
+        const int64_t wanted = rate > 0 ? std::max<int64_t>(1, std::llround(rate * kGrabSeconds / units_.unit_items)) : 1;
+        if (next_ + wanted > end_) end_ = units_.pass_end(std::max(next_ + wanted, end_ + 1));
     }
 }
 
@@ -116,7 +123,7 @@ std::optional<UnitQueue::Grab> UnitQueue::take(int worker) {
             held_.push_back(h);
             return Grab{h.begin, h.end, false, h.done};
         }
-        extend_end();
+        extend_end(worker);
         if (next_ < end_) {
             Held h;
             h.begin = next_;
@@ -174,7 +181,10 @@ void UnitQueue::add_results() {
         // Outside mutex_, so workers go on meanwhile: this thread alone touches the film.
         ItemCounts counts;
         for (const RenderedItems& r : f.results) {
-            add_to_film(*film_, r);
+            // A GPU's runs are millions of items, added by several threads (the film's sums
+            // are memory-bound); a CPU device's far fewer, by this one.
+            const int threads = std::clamp(r.item_count / kMinItemsPerAddThread, 1, max_add_threads_);
+            add_to_film(*film_, r, threads);
             counts.add(r.counts);
         }
         std::lock_guard<std::mutex> lock(mutex_);

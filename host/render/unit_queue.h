@@ -11,8 +11,9 @@
 //   (add_results); a run that finishes early waits, and a worker waits while the adding is
 //   kMaxReadyBacklog results behind.
 //
-// Whole passes: a time-bound render hands out passes until its budget is spent, and a stop
-// (an interrupt) finishes the pass it is in; the film always ends on a pass boundary.
+// Whole passes: a time-bound render hands out passes until its budget is spent (a pass starts
+// when a run taken before then reaches into it), and a stop (an interrupt) finishes the pass it
+// is in; the film always ends on a pass boundary.
 #pragma once
 
 #include <atomic>
@@ -102,7 +103,7 @@ private:
 
     int64_t grab_size(int worker) const;
     std::optional<Grab> take_over(int worker, Clock::time_point now);
-    void extend_end();
+    void extend_end(int worker);
     // Results next in unit order that wait to be added (the caller holds mutex_).
     int ready_backlog() const;
     std::optional<Grab> leave();
@@ -138,6 +139,11 @@ private:
     // A worker waits in take() while this many results wait to be added, so that a device
     // faster than the adding does not pile up results without bound.
     static constexpr int kMaxReadyBacklog = 2;
+    // A result is added to the film by one thread per this many items, at most
+    // max_add_threads_ (half the host's cores, up to kMaxAddThreads).
+    static constexpr int kMinItemsPerAddThread = 1 << 18;
+    static constexpr int kMaxAddThreads = 8;
+    const int max_add_threads_;
 };
 
 }  // namespace clbdpt
