@@ -2,10 +2,13 @@
 # Samples/s on a GPU through its vendor's OpenCL, from the bundle scripts/device_bundle.sh made
 # (run on the GPU machine, in a copy of the repository that holds the bundle).
 #   scripts/device_bench.sh [DIR=.gpu]
-# Each bundled scene without media at 1024 px and with media at 512 px, pt and bdpt, whole
-# passes for SECONDS (default 2) each; where DIR/bin/clbdpt_old exists it is run interleaved
-# with DIR/bin/clbdpt and the ratio printed. Then --profile of the Cornell box, and, where
-# CUDA's ptxas is at hand, the registers and spills of the pt and bdpt kernels for sm_90.
+# Each bundled scene for each size in SIZES (default "native large": the scene's own size, and
+# 1024 px without media, 512 px with), pt and bdpt, whole passes for SECONDS_EACH (default 2)
+# each; where DIR/bin/clbdpt_old exists it is run interleaved with DIR/bin/clbdpt and the ratio
+# printed, their Cornell box images compared bit for bit, and each bundled scene's default
+# render (its own size and spp, the pilot's choice) timed with both. Then --profile of the
+# Cornell box, and, where CUDA's ptxas is at hand, the registers and spills of the pt and bdpt
+# kernels for sm_90.
 # Logs, stats and the Cornell box images (PFM, seed 0, 64 spp, 256 px) go to $OUT (default
 # /tmp/device_bench). OPENCL_LIB names the driver's OpenCL library if it is not NVIDIA's usual.
 set -uo pipefail
@@ -39,12 +42,20 @@ for integrator in pt bdpt; do
   rate clbdpt "image_$integrator" "$cornell" --integrator "$integrator" --adaptive off --spp 64 >/dev/null
   cp /tmp/device_bench_out.exr "$out/cornell_$integrator.pfm"
   ls -t /tmp/device_bench_cache/*.bin | head -1 >"/tmp/device_bench_$integrator.bin"
+  if [ -x "$dir/bin/clbdpt_old" ]; then
+    rate clbdpt_old "image_${integrator}_old" "$cornell" --integrator "$integrator" --adaptive off --spp 64 >/dev/null
+    if cmp -s /tmp/device_bench_out.exr "$out/cornell_$integrator.pfm"; then
+      echo "cornell-box $integrator 64 spp: old and new images identical bit for bit"
+    else
+      echo "cornell-box $integrator 64 spp: old and new images DIFFER"
+    fi
+  fi
 done
 # Registers and spills, in the background while the rates are measured (CUDA's ptxas, where at
 # hand). The driver's program binary is PTX text ending in a NUL, which ptxas reads as garbage.
 ptxas=$(command -v ptxas || echo /usr/local/cuda/bin/ptxas)
 ptxas_jobs=()
-if [ -x "$ptxas" ]; then
+if [ -x "$ptxas" ] && [ -z "${NO_PTXAS:-}" ]; then
   for integrator in pt bdpt; do
     tr -d '\000' <"$(cat "/tmp/device_bench_$integrator.bin")" >"/tmp/device_bench_$integrator.ptx"
     timeout 240 "$ptxas" -arch=sm_90 -v "/tmp/device_bench_$integrator.ptx" -o /dev/null \
@@ -52,16 +63,38 @@ if [ -x "$ptxas" ]; then
     ptxas_jobs+=($!)
   done
 fi
+scene_file() {
+  if [ "$1" = sky ]; then echo "$dir/sky/sky.json"; else echo "$root/scenes/$1/$1.json"; fi
+}
+scenes="${SCENES:-cornell-box cornell-specular lamp-ceiling point-spot veach-mis sky smoke cornell-fog fog-spot}"
+if [ "$bins" != clbdpt ]; then
+  # The default render of each bundled scene as a user runs it (pilot, adaptive sampling, image
+  # written), wall seconds, old and new interleaved, twice: the first compiles the kernels the
+  # pilot tries (the driver's compiler caches them), so the second pair is the one to compare.
+  for scene in $scenes; do
+    for bin in $bins $bins; do
+      start=$(date +%s.%N)
+      timeout 120 "$dir/bin/$bin" render "$(scene_file "$scene")" -o /tmp/device_bench_default.exr \
+        >>"$out/log.txt" 2>&1 || echo "$scene default $bin failed (see log.txt)"
+      python3 -c "import sys,time; print('%-40s %8.3f s' % (sys.argv[1], time.time() - float(sys.argv[2])))" \
+        "${scene}_default_$bin" "$start"
+    done
+  done | tee "$out/default_seconds.txt"
+fi
 echo "M samples/s, $seconds s each ($(basename "$lib"))"
-for scene in cornell-box cornell-specular lamp-ceiling point-spot veach-mis sky smoke cornell-fog fog-spot; do
-  file="$root/scenes/$scene/$scene.json"
-  [ "$scene" = sky ] && file="$dir/sky/sky.json"
-  case $scene in smoke | cornell-fog | fog-spot) size="--width 512 --height 512" ;;
-    veach-mis) size="--width 1024 --height 684" ;; *) size="--width 1024 --height 1024" ;; esac
-  for integrator in pt bdpt; do
-    for bin in $bins; do
-      # shellcheck disable=SC2086
-      rate "$bin" "${scene}_${integrator}_$bin" "$file" --integrator "$integrator" $size --time "$seconds"
+for size_mode in ${SIZES:-native large}; do
+  for scene in $scenes; do
+    size=""
+    if [ "$size_mode" = large ]; then
+      case $scene in smoke | cornell-fog | fog-spot) size="--width 512 --height 512" ;;
+        veach-mis) size="--width 1024 --height 684" ;; *) size="--width 1024 --height 1024" ;; esac
+    fi
+    for integrator in pt bdpt; do
+      for bin in $bins; do
+        # shellcheck disable=SC2086
+        rate "$bin" "${scene}_${size_mode}_${integrator}_$bin" "$(scene_file "$scene")" --integrator "$integrator" \
+          $size --time "$seconds"
+      done
     done
   done
 done | tee "$out/rates.txt"
@@ -79,8 +112,14 @@ for label, new in rows.items():
 PY
 fi
 for integrator in pt bdpt; do
-  "$dir/bin/clbdpt" render "$cornell" --integrator "$integrator" --width 1024 --height 1024 --time "$seconds" \
-    --profile -o /tmp/device_bench_out.exr 2>&1 | grep -E 'profile|samples/s'
+  for threads in ${PROFILE_THREADS:-1 auto}; do
+    flag=""
+    [ "$threads" = 1 ] && flag="--collect-threads 1"
+    echo "profile, Cornell box $integrator 1024 px, collect threads $threads:"
+    # shellcheck disable=SC2086
+    "$dir/bin/clbdpt" render "$cornell" --integrator "$integrator" --width 1024 --height 1024 --time "$seconds" \
+      --profile $flag -o /tmp/device_bench_out.exr 2>&1 | grep -E 'profile|samples/s'
+  done
 done
 if [ ${#ptxas_jobs[@]} -gt 0 ]; then
   wait "${ptxas_jobs[@]}"
@@ -89,3 +128,5 @@ if [ ${#ptxas_jobs[@]} -gt 0 ]; then
     grep -E 'registers|spill|stack|fatal' "$out/ptxas_$integrator.txt" | head -6
   done
 fi
+# Few files come back from a lent machine: the stats as one archive.
+tar -czf "$out/stats.tgz" -C "$out" stats && rm -rf "$out/stats"
