@@ -1,11 +1,10 @@
 // The strategy pilot's variance estimates (render/strategy_pilot.h) against the same variances
 // measured on full passes. The pilot renders a sparse grid (one pixel of each 5 x 5 block of a
-// 256^2 film) and keeps only the grid's values: the camera sample of each grid pixel and the
-// light-image splats (t = 1) that land on the grid. A sparse pass traces the light subpaths of
-// one pixel in 25, so its light image's variance is scaled by 25 to a full pass's. On the
-// Cornell box about two thirds of full bdpt's one-sample transport variance is the light
-// image's, and all of lt's (a candidate there: the box is diffuse), so a splat lost on the way
-// to the grid, or a wrong scale, shows.
+// 256^2 film) and keeps only the grid's camera samples and, of the light image (t = 1), the
+// squares of all the splats of the grid's light subpaths: a full pass's light image has their
+// mean per item as its variance per pixel. On the Cornell box about two thirds of full bdpt's
+// one-sample transport variance is the light image's, and all of lt's (a candidate there: the
+// box is diffuse), so a splat left out, or a wrong scale, shows.
 #include <gtest/gtest.h>
 
 #include <algorithm>

@@ -576,6 +576,7 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
                 p["candidates"].push_back({{"name", c.name},
                                            {"variance_transport", c.variance_transport},
                                            {"variance_transport_standard_error", c.variance_transport_standard_error},
+                                           {"variance_light_image", c.variance_light_image},
                                            {"variance_transport_stratified", c.variance_transport_stratified},
                                            {"variance_shared_tail", c.variance_shared_tail},
                                            {"variance_pixel", c.variance_pixel},
@@ -656,10 +657,11 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
         for (const StrategyCandidate& c : pilot.candidates)
             std::fprintf(stderr,
                          "clbdpt: pilot: %-56s variance per sample: transport %.3g +- %.2g (stratified %.3g, "
-                         "shared tail %.3g), pixel %.3g; %.3f s/pass; "
+                         "shared tail %.3g, light image %.3g), pixel %.3g; %.3f s/pass; "
                          "predicted MSE %.3g at %.0f spp; efficiency %.3g%s\n",
                          c.name.c_str(), c.variance_transport, c.variance_transport_standard_error,
-                         c.variance_transport_stratified, c.variance_shared_tail, c.variance_pixel,
+                         c.variance_transport_stratified, c.variance_shared_tail, c.variance_light_image,
+                         c.variance_pixel,
                          c.seconds_per_pass, c.predicted_mse, c.predicted_spp, c.efficiency,
                          &c == &pilot.choice() ? "  <- chosen" : "");
     if (interrupted_by != 0) {

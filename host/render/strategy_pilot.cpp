@@ -57,20 +57,22 @@ int pilot_stride(int width, int height, int spp, size_t candidates) {
 constexpr double kFullGridBudgetSeconds = 10.0;
 
 // The sparse grid's values of one pilot pass: per grid pixel (the pass's work item), the camera
-// sample's rgb and the light image's rgb there. The grid alone is kept, so the pilot's memory
-// and time do not grow with the film: with a full film per pass (twelve), a 2048^2 render's
-// pilot took 7.8 s and the process peaked at 3.3 GB; with the grid, 0.32 s and 0.39 GB.
+// sample's rgb; and of the light image, the sums of its splats' squares. The grid alone is kept,
+// so the pilot's memory and time do not grow with the film: with a full film per pass (twelve),
+// a 2048^2 render's pilot took 7.8 s and the process peaked at 3.3 GB; with the grid, 0.32 s
+// and 0.39 GB.
 struct GridPass {
-    int columns = 0, rows = 0, stride = 1, width = 0, height = 0;
-    std::vector<double> camera, light;
+    int columns = 0, rows = 0;
+    std::vector<double> camera;
+    // Over all the pass's splats, wherever they land: their number, the sum of r^2 + g^2 + b^2,
+    // and of its square (see LightImageVariance).
+    double splats = 0, splat_squares = 0, splat_squares_squared = 0;
 
-    GridPass(int w, int h, int k)
-        : columns((w + k - 1) / k), rows((h + k - 1) / k), stride(k), width(w), height(h),
-          camera(size_t(columns) * rows * 3), light(size_t(columns) * rows * 3) {}
+    GridPass(int w, int h, int k) : columns((w + k - 1) / k), rows((h + k - 1) / k), camera(size_t(columns) * rows * 3) {}
     int items() const { return columns * rows; }
     // Another pass of the same grid, pixel by pixel (a set's sum).
     void add(const GridPass& other) {
-        for (size_t v = 0; v < camera.size(); ++v) camera[v] += other.camera[v], light[v] += other.light[v];
+        for (size_t v = 0; v < camera.size(); ++v) camera[v] += other.camera[v];
     }
     // A pass's items (a dropped one adds nothing, as in add_to_film).
     void add(const RenderedItems& r) {
@@ -83,14 +85,43 @@ struct GridPass {
             for (int c = 0; c < 3; ++c) camera[size_t(r.first_item + i) * 3 + c] += r.camera[size_t(i) * 3 + c];
         }
         for (const SplatRecord& s : r.splats) {
-            const int item = render_pixel_item(s.pixel, width, height, stride);
-            if (item < 0) continue;
-            light[size_t(item) * 3] += s.r;
-            light[size_t(item) * 3 + 1] += s.g;
-            light[size_t(item) * 3 + 2] += s.b;
+            const double q = double(s.r) * s.r + double(s.g) * s.g + double(s.b) * s.b;
+            splats += 1;
+            splat_squares += q;
+            splat_squares_squared += q * q;
         }
     }
 };
+
+// The light image's (t = 1) variance per pixel and channel of one full pass, from the splats of
+// sparse passes wherever they land. A full pass's light image at a pixel is the sum over its
+// items' light subpaths of what each splats there, so its variance is the sum of theirs: about
+// the sum of the squared splats, as a pixel receives a splat from a small share of the light
+// subpaths. Over the film, that is per item the mean of the squares of its splats (summed over
+// their channels), divided by 3 channels. A sparse pass's items trace their light subpaths as
+// a full pass's do, so every splat of theirs counts, not only those that land on the grid: on
+// veach-mis those were 1/70 of the variance, the rest in splats of glossy highlights that the
+// grid's pixels had missed. The standard error takes the splats for independent, their number
+// for fixed (an item's few splats rarely land on one pixel).
+struct LightImageVariance {
+    double mean = 0, standard_error = 0;
+};
+LightImageVariance light_image_variance(const std::vector<GridPass>& passes) {
+    double splats = 0, squares = 0, squares_squared = 0, items = 0;
+    for (const GridPass& p : passes) {
+        splats += p.splats;
+        squares += p.splat_squares;
+        squares_squared += p.splat_squares_squared;
+        items += p.items();
+    }
+    LightImageVariance v;
+    if (items < 1 || splats < 2) return v;
+    v.mean = squares / items / 3.0;
+    // The sum of `splats` independent squares has variance splats x their variance.
+    const double spread = std::max(0.0, squares_squared - squares * squares / splats) * splats / (splats - 1);
+    v.standard_error = std::sqrt(spread) / items / 3.0;
+    return v;
+}
 
 // Half the squared difference of two sparse passes over the grid's pixels and channels, summed
 // into kVarianceGroups interleaved groups of pixels (the grid's pixel number modulo the group
@@ -127,24 +158,21 @@ struct GroupedVariance {
     }
 };
 
-// At one grid pixel, half the squared difference of a and b (each scaled by `scale`: 1/n for
-// the sums of sets of n passes), summed over the channels, the light image's part times
-// light_share (see GroupedVariance).
-double difference_term(const GridPass& a, const GridPass& b, int item, double scale, double light_share) {
+// At one grid pixel, half the squared difference of a's and b's camera values (each scaled by
+// `scale`: 1/n for the sums of sets of n passes), summed over the channels.
+double difference_term(const GridPass& a, const GridPass& b, int item, double scale) {
     double term = 0;
     for (int c = 0; c < 3; ++c) {
         const size_t i = size_t(item) * 3 + size_t(c);
         const double dc = scale * (a.camera[i] - b.camera[i]);
-        const double dl = scale * (a.light[i] - b.light[i]);
-        term += 0.5 * (dc * dc + dl * dl * light_share);
+        term += 0.5 * dc * dc;
     }
     return term;
 }
 
-GroupedVariance one_sample_variance(const GridPass& a, const GridPass& b, double light_share) {
+GroupedVariance one_sample_variance(const GridPass& a, const GridPass& b) {
     GroupedVariance v;
-    for (int item = 0; item < a.items(); ++item)
-        v.add(item, difference_term(a, b, item, 1.0, light_share));
+    for (int item = 0; item < a.items(); ++item) v.add(item, difference_term(a, b, item, 1.0));
     return v;
 }
 
@@ -156,7 +184,7 @@ struct SetVariances {
     GroupedVariance one, set;
     std::vector<double> one_terms;  // `one`'s term of each grid pixel
 };
-SetVariances set_variances(const std::vector<GridPass>& passes, int n, double light_share) {
+SetVariances set_variances(const std::vector<GridPass>& passes, int n) {
     const GridPass* x = passes.data();
     const GridPass* y = passes.data() + n;
     GridPass x_sum = x[0], y_sum = y[0];
@@ -167,10 +195,10 @@ SetVariances set_variances(const std::vector<GridPass>& passes, int n, double li
     SetVariances v;
     for (int item = 0; item < x_sum.items(); ++item) {
         double one = 0;
-        for (int j = 0; j < n; ++j) one += difference_term(x[j], y[j], item, 1.0, light_share);
+        for (int j = 0; j < n; ++j) one += difference_term(x[j], y[j], item, 1.0);
         v.one.add(item, one / n);
         v.one_terms.push_back(one / n);
-        v.set.add(item, n * difference_term(x_sum, y_sum, item, 1.0 / n, light_share));
+        v.set.add(item, n * difference_term(x_sum, y_sum, item, 1.0 / n));
     }
     return v;
 }
@@ -377,7 +405,7 @@ StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene
         }
 
     std::vector<SetVariances> transport;
-    for (int i = 0; i < k; ++i) transport.push_back(set_variances(passes[size_t(i)], kPilotSetSize, full_per_sparse));
+    for (int i = 0; i < k; ++i) transport.push_back(set_variances(passes[size_t(i)], kPilotSetSize));
     std::vector<const std::vector<double>*> camera_terms;
     for (int i = 0; i < k; ++i)
         if (pilot.candidates[size_t(i)].integrator != Integrator::Lt)
@@ -388,9 +416,11 @@ StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene
         StrategyCandidate& c = pilot.candidates[size_t(i)];
         const std::vector<GridPass>& f = passes[size_t(i)];
         const SetVariances& t = transport[size_t(i)];
-        const GroupedVariance whole = one_sample_variance(f[0], f[2 * kPilotSetSize], full_per_sparse);
-        c.variance_transport = t.one.mean();
-        c.variance_transport_standard_error = t.one.standard_error();
+        const GroupedVariance whole = one_sample_variance(f[0], f[2 * kPilotSetSize]);
+        const LightImageVariance light = light_image_variance(f);
+        c.variance_light_image = light.mean;
+        c.variance_transport = t.one.mean() + light.mean;
+        c.variance_transport_standard_error = std::hypot(t.one.standard_error(), light.standard_error);
         // N x (variance of N samples' mean) = A + B / N: B is what stratification removes
         // faster than 1/N. From N = 1 and N = kPilotSetSize.
         const double n_set = kPilotSetSize;
@@ -403,7 +433,7 @@ StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene
             for (int item = 0; item < items; ++item)
                 own.add(item, t.one_terms[size_t(item)] - shared_tail[size_t(item)]);
         }
-        c.variance_shared_tail = c.variance_transport - own.mean();
+        c.variance_shared_tail = t.one.mean() - own.mean();
         c.variance_pixel = pixel_variance(whole, t.one);
         c.seconds_per_pass = seconds[size_t(i)] * full_per_sparse;
         const double n = time_budget > 0 && c.seconds_per_pass > 0 ? std::max(1.0, time_budget / c.seconds_per_pass)
@@ -414,8 +444,9 @@ StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene
         // cost 25x (without this, fog-spot at 128x128 got pt, 0.04-0.07x of bdpt's efficiency
         // there, in one of three pilots); so the part of each transport variance that falls as
         // 1/N (less the shared tail) counts kRiskStandardErrors standard errors high.
-        const double risky_transport = std::max(0.0, own.mean() - c.variance_transport_stratified) +
-                                       kRiskStandardErrors * own.standard_error();
+        const double risky_transport =
+            std::max(0.0, own.mean() + light.mean - c.variance_transport_stratified) +
+            kRiskStandardErrors * std::hypot(own.standard_error(), light.standard_error);
         const double transport_mse = risky_transport / n + c.variance_transport_stratified / (n * n);
         c.predicted_mse = transport_mse + c.variance_pixel / std::pow(n, kPixelVarianceExponent);
         const double cost = c.predicted_mse * n * c.seconds_per_pass;

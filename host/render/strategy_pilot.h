@@ -31,8 +31,9 @@
 // chosen: the inverse of Grittmann et al.'s efficiency. A leaves out the samples that every
 // camera candidate has alike (shared_tail_terms) and counts two standard errors high, so that a
 // candidate whose fireflies the grid happened to miss is not chosen for them. The light image
-// (t = 1) of a sparse pass holds only the sparse pixels' light subpaths; its variance is scaled
-// to a full pass.
+// (t = 1) takes no part in the grid's terms: its variance is estimated from the squares of all
+// the splats of the sparse passes' light subpaths, wherever they land (light_image_variance),
+// 20-30x more of them than land on the grid, and counted in A.
 #pragma once
 
 #include <cstdint>
@@ -53,6 +54,8 @@ struct StrategyCandidate {
     // in the pixel.
     double variance_transport = 0;
     double variance_transport_standard_error = 0;  // over the pilot's pixels
+    // The light image's (t = 1) part of variance_transport, from every splat of the pilot's passes.
+    double variance_light_image = 0;
     // The part B of variance_transport = A + B that the render's stratified samples remove faster
     // than 1/N: N samples' transport variance is A / N + B / N^2.
     double variance_transport_stratified = 0;
