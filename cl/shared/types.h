@@ -265,16 +265,6 @@ inline clbdpt_int render_item_pixel(clbdpt_int item, clbdpt_int width, clbdpt_in
     return y * width + x;
 }
 
-/* The inverse: the work item whose pixel `pixel` is in a pass of stride `stride`, or -1 where the
- * pass does not visit it (the strategy pilot keeps a sparse pass's light-image splats that land
- * on its grid). */
-inline clbdpt_int render_pixel_item(clbdpt_int pixel, clbdpt_int width, clbdpt_int height, clbdpt_int stride) {
-    if (stride == 1) return pixel;
-    clbdpt_int columns = (width + stride - 1) / stride;
-    clbdpt_int item = (pixel / width / stride) * columns + (pixel % width) / stride;
-    return render_item_pixel(item, width, height, stride) == pixel ? item : -1;
-}
-
 /* The pixel of work item `item` of a launch: with run_length > 0 (RenderParams) the run's pixel
  * run_pixel + item % run_length (its sample is item / run_length further on), else the pass's
  * render_item_pixel. The kernel and the host's collection of its outputs both map items so. */

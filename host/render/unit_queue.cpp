@@ -51,16 +51,21 @@ void UnitQueue::extend_end(int worker) {
         // While the budget lasts, the passes that this worker's next run (about kGrabSeconds of
         // its work) reaches into start: a fast device's run spans several passes, which it
         // renders in one go (DeviceWorker), as in a render of a given spp.
-        const double rate = rate_[size_t(worker)];
-        const int64_t wanted = rate > 0 ? std::max<int64_t>(1, std::llround(rate * kGrabSeconds / units_.unit_items)) : 1;
+        const int64_t wanted = grab_units(worker);
         if (next_ + wanted > end_) end_ = units_.pass_end(std::max(next_ + wanted, end_ + 1));
     }
 }
 
-int64_t UnitQueue::grab_size(int worker) const {
+int64_t UnitQueue::grab_units(int worker) const {
     const double rate = rate_[size_t(worker)];
     if (rate <= 0) return 1;  // not measured yet: one unit
-    int64_t n = std::max<int64_t>(1, std::llround(rate * kGrabSeconds / units_.unit_items));
+    return std::max<int64_t>(1, std::llround(rate * kGrabSeconds / units_.unit_items));
+}
+
+int64_t UnitQueue::grab_size(int worker) const {
+    const double rate = rate_[size_t(worker)];
+    int64_t n = grab_units(worker);
+    if (rate <= 0) return n;
     if (!timed_ && workers_in_render_ > 1) {
         // Towards the end, at most half of this worker's share of what is left (guided
         // self-scheduling), so that the last runs are short on every worker.

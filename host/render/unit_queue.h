@@ -101,6 +101,8 @@ private:
         std::vector<RenderedItems> results;
     };
 
+    // Units of about kGrabSeconds of `worker`'s measured rate (1 until measured).
+    int64_t grab_units(int worker) const;
     int64_t grab_size(int worker) const;
     std::optional<Grab> take_over(int worker, Clock::time_point now);
     void extend_end(int worker);
