@@ -30,7 +30,8 @@
 // candidate with the least error times time (N x seconds per sample, from its fastest pass) is
 // chosen: the inverse of Grittmann et al.'s efficiency. A leaves out the samples that every
 // camera candidate has alike (shared_tail_terms) and counts two standard errors high, so that a
-// candidate whose fireflies the grid happened to miss is not chosen for them. The light image
+// candidate whose fireflies the grid happened to miss is not chosen for them (the standard error
+// without the grid's largest terms, which are in A already). The light image
 // (t = 1) takes no part in the grid's terms: its variance is estimated from the squares of all
 // the splats of the sparse passes' light subpaths, wherever they land (light_image_variance),
 // 20-30x more of them than land on the grid, and counted in A.
