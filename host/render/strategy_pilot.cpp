@@ -445,17 +445,13 @@ StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene
         const double n_set = kPilotSetSize;
         c.variance_transport_stratified =
             std::min(c.variance_transport, median_group_difference(t.one, t.set) * n_set / (n_set - 1.0));
-        // lt's terms were not compared (it has no camera subpath): it keeps them all.
-        GroupedVariance own = t.one;
-        if (c.integrator != Integrator::Lt) {
-            own = GroupedVariance();
-            for (int item = 0; item < items; ++item)
-                own.add(item, t.one_terms[size_t(item)] - shared_tail[size_t(item)]);
-        }
-        std::vector<double> own_terms;
-        for (int item = 0; item < items; ++item)
-            own_terms.push_back(c.integrator == Integrator::Lt ? t.one_terms[size_t(item)]
-                                                                : t.one_terms[size_t(item)] - shared_tail[size_t(item)]);
+        // The candidate's own terms, less the shared tail; lt's terms were not compared (it has
+        // no camera subpath): it keeps them all.
+        std::vector<double> own_terms = t.one_terms;
+        if (c.integrator != Integrator::Lt)
+            for (int item = 0; item < items; ++item) own_terms[size_t(item)] -= shared_tail[size_t(item)];
+        GroupedVariance own;
+        for (int item = 0; item < items; ++item) own.add(item, own_terms[size_t(item)]);
         const double own_hedge_error = standard_error_without_largest(own_terms, kHedgeLeavesOut);
         c.variance_shared_tail = t.one.mean() - own.mean();
         c.variance_pixel = pixel_variance(whole, t.one);
