@@ -79,6 +79,21 @@ TEST_F(CliTest, MpiProcessesRenderTheSingleProcessImage) {
     }
 }
 
+// A small film and many passes: each process's device soon takes runs of several passes and
+// renders them in one go (DeviceWorker); the leader accepts those joined results and the image
+// is still the single process's (adaptive sampling, off under MPI, is off in both).
+TEST_F(CliTest, MpiDevicesJoinPassesIntoOneRun) {
+    const std::string render = "render " + std::string(CLBDPT_SCENES_DIR) +
+                               "/cornell-box/cornell-box.json --integrator bdpt --width 16 --height 12 --spp 64 --adaptive off";
+    CommandResult one = run(render + " -o " + out("one.exr"));
+    ASSERT_EQ(one.status, 0) << one.output;
+    CommandResult r = run(render + " -o " + out("two.exr"), mpirun(2));
+    ASSERT_EQ(r.status, 0) << r.output;
+    // A result the leader refuses drops that process's device, and the leader renders on alone.
+    EXPECT_EQ(r.output.find("warning"), std::string::npos) << r.output;
+    expect_same_image(out("one.exr"), out("two.exr"));
+}
+
 TEST_F(CliTest, MpiCheckpointResumesUnderAnotherProcessCount) {
     CommandResult first = run(kRender + " --spp 3 -o " + out("a.exr") + " --checkpoint " + out("a.ck"), mpirun(2));
     ASSERT_EQ(first.status, 0) << first.output;

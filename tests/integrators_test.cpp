@@ -5,6 +5,7 @@
 
 #include <cmath>
 
+#include "mpi/items_message.h"
 #include "render/render_loop.h"
 #include "render/work_units.h"
 #include "render_test_util.h"
@@ -100,8 +101,11 @@ TEST_P(BatchingTest, ImageDoesNotDependOnBatching) {
     DeviceWorker worker(batched);
     Film joined(40, 40);
     for (const auto& [begin, end] : {std::pair<int64_t, int64_t>{0, 2}, {2, 2 * units.units_per_pass}}) {
-        const std::vector<RenderedItems> results = worker.render(units.runs(begin, end), {});
+        const std::vector<ItemRun> runs = units.runs(begin, end);
+        const std::vector<RenderedItems> results = worker.render(runs, {});
         EXPECT_EQ(results.size(), 1u);
+        // What another process's device sends back this way is what the leader accepts.
+        EXPECT_TRUE(results_match_runs(runs, results, 40 * 40));
         for (const RenderedItems& r : results) add_to_film(joined, r);
     }
     EXPECT_EQ(a.camera_sum, joined.camera_sum);

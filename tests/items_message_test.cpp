@@ -91,5 +91,47 @@ TEST(ItemsMessage, FailureAndDamageAreErrors) {
     EXPECT_THROW(decode_runs(runs), Error);
 }
 
+// The leader accepts results run by run or joined across consecutive passes (as DeviceWorker
+// renders them, and as CI's MPI run first showed), and nothing else.
+TEST(ItemsMessage, ResultsMustBeTheRunsAskedFor) {
+    constexpr int kPixels = 100;
+    // The last 40 items of pass 3, then passes 4 and 5 whole.
+    const std::vector<ItemRun> runs = {{3, 60, 40}, {4, 0, 100}, {5, 0, 100}};
+    auto result = [](uint32_t pass, int first_item, int item_count, int run_length) {
+        RenderedItems r;
+        r.sample_index = pass;
+        r.first_item = first_item;
+        r.item_count = item_count;
+        r.run_length = run_length;
+        return r;
+    };
+    const RenderedItems r3 = result(3, 60, 40, 0), r4 = result(4, 0, 100, 0), r5 = result(5, 0, 100, 0);
+    EXPECT_TRUE(results_match_runs(runs, {r3, r4, r5}, kPixels));
+    EXPECT_TRUE(results_match_runs(runs, {result(3, 60, 240, kPixels)}, kPixels));
+    EXPECT_TRUE(results_match_runs(runs, {result(3, 60, 140, kPixels), r5}, kPixels));
+    EXPECT_TRUE(results_match_runs(runs, {r3, result(4, 0, 200, kPixels)}, kPixels));
+
+    EXPECT_FALSE(results_match_runs(runs, {r3, r4}, kPixels));                             // one missing
+    EXPECT_FALSE(results_match_runs(runs, {r3, r4, r5, r5}, kPixels));                     // one too many
+    EXPECT_FALSE(results_match_runs(runs, {r3, r5, r4}, kPixels));                         // out of order
+    EXPECT_FALSE(results_match_runs(runs, {result(3, 60, 239, kPixels)}, kPixels));        // short by an item
+    EXPECT_FALSE(results_match_runs(runs, {result(3, 60, 241, kPixels)}, kPixels));        // past the runs
+    EXPECT_FALSE(results_match_runs(runs, {result(3, 60, 240, 0)}, kPixels));              // not marked joined
+    EXPECT_FALSE(results_match_runs(runs, {result(3, 60, 240, 50)}, kPixels));             // another film
+    EXPECT_FALSE(results_match_runs(runs, {result(3, 60, 40, kPixels), r4, r5}, kPixels));  // a "join" of one
+    RenderedItems shifted = result(3, 60, 240, kPixels);
+    shifted.run_pixel = 1;
+    EXPECT_FALSE(results_match_runs(runs, {shifted}, kPixels));
+    // Passes 4 and 6 do not follow one another: they cannot be one result.
+    EXPECT_FALSE(results_match_runs({{4, 0, 100}, {6, 0, 100}}, {result(4, 0, 200, kPixels)}, kPixels));
+    RenderedItems outside = r4;
+    outside.splats = {{1, 1, 1, kPixels}};
+    EXPECT_FALSE(results_match_runs(runs, {r3, outside, r5}, kPixels));
+    RenderedItems bad_slot = r4;
+    bad_slot.strategy_slots = 2;
+    bad_slot.strategy_splats = {{2, {1, 1, 1, 0}}};
+    EXPECT_FALSE(results_match_runs(runs, {r3, bad_slot, r5}, kPixels));
+}
+
 }  // namespace
 }  // namespace clbdpt

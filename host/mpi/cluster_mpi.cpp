@@ -64,7 +64,7 @@ std::vector<uint8_t> receive_bytes(int from, int tag) {
 class RemoteDevice : public UnitWorker {
 public:
     RemoteDevice(int rank, int device, std::string name, int width, int height)
-        : rank_(rank), device_(device), name_(std::move(name)), pixels_(int64_t(width) * height) {}
+        : rank_(rank), device_(device), name_(std::move(name)), pixels_(width * height) {}
     std::string name() const override { return name_ + " (process " + std::to_string(rank_) + ")"; }
     // The other process cannot be told to stop half-way: a run taken over from it is rendered
     // to the end and its result discarded.
@@ -76,22 +76,13 @@ public:
     }
 
 private:
-    // The film trusts what it adds: the results must be the runs asked for, on this film.
     void check(const std::vector<ItemRun>& runs, const std::vector<RenderedItems>& results) const {
-        bool ok = results.size() == runs.size();
-        for (size_t k = 0; ok && k < runs.size(); ++k) {
-            const RenderedItems& r = results[k];
-            ok = r.sample_index == runs[k].pass && r.first_item == runs[k].first_item &&
-                 r.item_count == runs[k].item_count && r.pixel_stride == 1;
-            for (const SplatRecord& s : r.splats) ok = ok && s.pixel >= 0 && s.pixel < pixels_;
-            for (const RenderedItems::StrategySplat& s : r.strategy_splats)
-                ok = ok && s.splat.pixel >= 0 && s.splat.pixel < pixels_ && s.slot >= 0 && s.slot < r.strategy_slots;
-        }
-        if (!ok) throw Error("MPI: process " + std::to_string(rank_) + " sent results that do not match its work");
+        if (!results_match_runs(runs, results, pixels_))
+            throw Error("MPI: process " + std::to_string(rank_) + " sent results that do not match its work");
     }
     int rank_, device_;
     std::string name_;
-    int64_t pixels_;
+    int pixels_;
 };
 
 }  // namespace

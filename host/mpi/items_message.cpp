@@ -141,4 +141,27 @@ std::vector<RenderedItems> decode_results(const std::vector<uint8_t>& bytes) {
     return results;
 }
 
+bool results_match_runs(const std::vector<ItemRun>& runs, const std::vector<RenderedItems>& results, int pixels) {
+    size_t k = 0;
+    for (const RenderedItems& r : results) {
+        if (k >= runs.size() || r.sample_index != runs[k].pass || r.first_item != runs[k].first_item ||
+            r.pixel_stride != 1)
+            return false;
+        if (r.run_length == 0) {
+            if (r.item_count != runs[k].item_count) return false;
+            ++k;
+        } else {
+            int64_t items = 0;
+            const size_t n = joinable_runs(runs, k, pixels, r.item_count, &items);
+            if (r.run_pixel != 0 || r.run_length != pixels || n < 2 || items != r.item_count) return false;
+            k += n;
+        }
+        for (const SplatRecord& s : r.splats)
+            if (s.pixel < 0 || s.pixel >= pixels) return false;
+        for (const RenderedItems::StrategySplat& s : r.strategy_splats)
+            if (s.splat.pixel < 0 || s.splat.pixel >= pixels || s.slot < 0 || s.slot >= r.strategy_slots) return false;
+    }
+    return k == runs.size();
+}
+
 }  // namespace clbdpt

@@ -21,4 +21,9 @@ std::vector<uint8_t> encode_failure(const std::string& what);
 // Throws clbdpt::Error with the remote error for a failure, and for a damaged message.
 std::vector<RenderedItems> decode_results(const std::vector<uint8_t>& bytes);
 
+// Whether a remote device's results are the runs it was asked for, on a film of `pixels`
+// pixels: one result per run, or one per runs of consecutive passes that it joined
+// (joinable_runs), with every splat inside the film. The film trusts what it adds.
+bool results_match_runs(const std::vector<ItemRun>& runs, const std::vector<RenderedItems>& results, int pixels);
+
 }  // namespace clbdpt

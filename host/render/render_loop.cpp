@@ -36,15 +36,8 @@ std::vector<RenderedItems> DeviceWorker::render(const std::vector<ItemRun>& runs
     for (size_t k = 0; k < runs.size();) {
         if (cancelled && cancelled()) break;
         const ItemRun& first = runs[k];
-        int64_t items = first.item_count;
-        size_t n = 1;
-        for (; k + n < runs.size(); ++n) {
-            const ItemRun& next = runs[k + n];
-            const bool follows = next.pass == first.pass + n && next.first_item == 0 &&
-                                 int64_t(next.pass - first.pass) * pass_items - first.first_item == items;
-            if (!follows || items + next.item_count > kMaxMergedItems) break;
-            items += next.item_count;
-        }
+        int64_t items = 0;
+        const size_t n = joinable_runs(runs, k, pass_items, kMaxMergedItems, &items);
         PassSpec pass;
         pass.sample_index = pass.position_sample_index = first.pass;
         pass.seed = pass.position_seed = renderer_.options().seed;

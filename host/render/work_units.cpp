@@ -6,6 +6,21 @@
 
 namespace clbdpt {
 
+size_t joinable_runs(const std::vector<ItemRun>& runs, size_t k, int items_per_pass, int64_t max_items,
+                     int64_t* items) {
+    const ItemRun& first = runs[k];
+    *items = first.item_count;
+    size_t n = 1;
+    for (; k + n < runs.size(); ++n) {
+        const ItemRun& next = runs[k + n];
+        const bool follows = next.pass == first.pass + n && next.first_item == 0 &&
+                             int64_t(next.pass - first.pass) * items_per_pass - first.first_item == *items;
+        if (!follows || *items + next.item_count > max_items) break;
+        *items += next.item_count;
+    }
+    return n;
+}
+
 WorkUnits::WorkUnits(int items_per_pass_, int first_pass_, int unit_items_)
     : items_per_pass(items_per_pass_), first_pass(first_pass_) {
     if (items_per_pass < 1 || unit_items_ < 1) throw Error("work units need at least one item");

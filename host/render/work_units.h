@@ -4,6 +4,7 @@
 // the same bit for bit however the units were shared out.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -15,6 +16,12 @@ struct ItemRun {
     int first_item = 0;
     int item_count = 0;
 };
+
+// How many of runs[k..] a device may render as one run through the pixels of consecutive
+// passes (DeviceWorker, PassSpec::run_length): each next run starts the pass after the one
+// before it ends, and together they stay within max_items. At least 1; *items: their items.
+size_t joinable_runs(const std::vector<ItemRun>& runs, size_t k, int items_per_pass, int64_t max_items,
+                     int64_t* items);
 
 struct WorkUnits {
     // Items per unit: small enough that a unit of a slow device does not hold up the end of a
