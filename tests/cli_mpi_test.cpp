@@ -84,7 +84,8 @@ TEST_F(CliTest, MpiProcessesRenderTheSingleProcessImage) {
 // is still the single process's (adaptive sampling, off under MPI, is off in both).
 TEST_F(CliTest, MpiDevicesJoinPassesIntoOneRun) {
     const std::string render = "render " + std::string(CLBDPT_SCENES_DIR) +
-                               "/cornell-box/cornell-box.json --integrator bdpt --width 16 --height 12 --spp 64 --adaptive off";
+                               "/cornell-box/cornell-box.json --integrator bdpt --width 16 --height 12 --spp 64 "
+                               "--adaptive off";
     CommandResult one = run(render + " -o " + out("one.exr"));
     ASSERT_EQ(one.status, 0) << one.output;
     CommandResult r = run(render + " -o " + out("two.exr"), mpirun(2));
