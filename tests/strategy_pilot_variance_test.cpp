@@ -74,7 +74,7 @@ TEST(StrategyPilotVariance, TransportVarianceMatchesFullPasses) {
     DeviceScene scene = build_device_scene(loaded, film, film);
     const RenderOptions options = make_options(Integrator::Bdpt, max_depth, 11, SamplerKind::Sobol);
     RenderStats stats;
-    StrategyPilot pilot = run_strategy_pilot(test_device(), scene, options, 64, 0.0, &stats);
+    StrategyPilot pilot = run_strategy_pilot(test_device(), scene, options, 64, 0.0, false, &stats);
     ASSERT_EQ(pilot.pixel_stride, 5) << "the test is about a sparse grid";
     const uint64_t items = uint64_t(render_item_count(film, film, pilot.pixel_stride));
     EXPECT_EQ(pilot.samples, items * 9 * pilot.candidates.size());
@@ -125,7 +125,7 @@ TEST(StrategyPilotChoice, CornellSpecularPredictsTheCausticsOfPt) {
     for (uint32_t seed : {31u, 32u, 33u}) {
         const RenderOptions options = make_options(Integrator::Bdpt, loaded.render.max_depth, seed, SamplerKind::Sobol);
         RenderStats stats;
-        const StrategyPilot pilot = run_strategy_pilot(test_device(), scene, options, 64, 0.0, &stats);
+        const StrategyPilot pilot = run_strategy_pilot(test_device(), scene, options, 64, 0.0, false, &stats);
         double pt = 0, mix = 0;
         for (const StrategyCandidate& c : pilot.candidates) {
             if (c.integrator == Integrator::Pt) pt = c.predicted_mse;
@@ -140,6 +140,45 @@ TEST(StrategyPilotChoice, CornellSpecularPredictsTheCausticsOfPt) {
     EXPECT_GE(ratios[1], 2.2) << "pt / BDPT without inner connections: " << ratios[0] << ", " << ratios[1] << ", "
                               << ratios[2];
     EXPECT_GT(shared_tail, 0.0) << "the mirror's caustic samples, shared by every candidate";
+}
+
+// With adaptive sampling the pilot credits each camera image with what the plan will take off
+// it (run_strategy_pilot). On the Cornell box a path tracer's error gathers near the light, and
+// the plan there takes 43% of pt's squared error off with 3% more samples (64 spp, seeds 1 and
+// 2: MSE 5.0e-5 without it, 2.9e-5 with it); the pilot credits a part of that (it left 0.81
+// for 5.8% more samples when this was written). lt has no camera image: nothing to credit.
+// The same seed gives the same passes, so only the prediction may differ.
+TEST(StrategyPilotAdaptive, CreditsTheCameraImageNotTheLightImage) {
+    Scene loaded = load_scene(scene_path("cornell-box"));
+    DeviceScene scene = build_device_scene(loaded, 256, 256);
+    const RenderOptions options = make_options(Integrator::Bdpt, loaded.render.max_depth, 5, SamplerKind::Sobol);
+    RenderStats stats;
+    const StrategyPilot plain = run_strategy_pilot(test_device(), scene, options, 64, 0.0, false, &stats);
+    const StrategyPilot adaptive = run_strategy_pilot(test_device(), scene, options, 64, 0.0, true, &stats);
+    ASSERT_EQ(plain.candidates.size(), adaptive.candidates.size());
+    bool saw_pt = false, saw_lt = false;
+    for (size_t i = 0; i < plain.candidates.size(); ++i) {
+        const StrategyCandidate &p = plain.candidates[i], &a = adaptive.candidates[i];
+        EXPECT_EQ(p.variance_transport, a.variance_transport) << p.name << ": the same passes";
+        EXPECT_EQ(p.adaptive_variance_left, 1.0) << p.name;
+        EXPECT_EQ(p.adaptive_extra_share, 0.0) << p.name;
+        EXPECT_LE(a.adaptive_variance_left, 1.0) << a.name;
+        EXPECT_LE(a.adaptive_extra_share, 1.0) << a.name << ": at most as many extra samples as the passes";
+        if (a.integrator == Integrator::Pt) {
+            saw_pt = true;
+            EXPECT_LT(a.adaptive_variance_left, 0.95) << "pt's error near the light";
+            EXPECT_GT(a.adaptive_extra_share, 0.0);
+            EXPECT_LT(a.adaptive_extra_share, 0.2);
+            EXPECT_LT(a.predicted_mse, p.predicted_mse);
+        }
+        if (a.integrator == Integrator::Lt) {
+            saw_lt = true;
+            EXPECT_EQ(a.adaptive_variance_left, 1.0) << "lt's light image gets no extra samples";
+            EXPECT_EQ(a.adaptive_extra_share, 0.0);
+            EXPECT_EQ(a.predicted_mse, p.predicted_mse);
+        }
+    }
+    EXPECT_TRUE(saw_pt && saw_lt) << "the Cornell box is diffuse: pt and lt are both candidates";
 }
 
 }  // namespace

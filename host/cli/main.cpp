@@ -194,7 +194,7 @@ void check_film_fits_in_memory(int width, int height, int strategy_depth) {
 // renderer for the chosen integrator into `renderers` (it goes on to render there). Returns how
 // the mix was chosen, for the summary.
 std::string choose_strategy_mix(DeviceContext& device, const DeviceScene& ds, RenderOptions* options,
-                                StrategyPilot* pilot, RenderStats* pilot_stats,
+                                bool adaptive, StrategyPilot* pilot, RenderStats* pilot_stats,
                                 std::vector<std::unique_ptr<Renderer>>* renderers) {
     // A time budget gets the pilot when it is at least this many seconds.
     constexpr double kPilotMinBudget = 1.0;
@@ -204,7 +204,8 @@ std::string choose_strategy_mix(DeviceContext& device, const DeviceScene& ds, Re
     const size_t candidates = strategy_candidates(light_tracing_is_a_candidate(ds)).size();
     if (timed ? options->time_budget < kPilotMinBudget : !strategy_pilot_fits(width, height, options->spp, candidates))
         return "bdpt: too few samples for the pilot to pay off";
-    *pilot = run_strategy_pilot(device, ds, *options, timed ? 0 : options->spp, options->time_budget, pilot_stats);
+    *pilot = run_strategy_pilot(device, ds, *options, timed ? 0 : options->spp, options->time_budget, adaptive,
+                                pilot_stats);
     const StrategyCandidate& c = pilot->choice();
     options->integrator = c.integrator;
     options->light_subpaths = c.light_subpaths;
@@ -404,12 +405,21 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
     std::vector<std::unique_ptr<Renderer>> renderers;
     std::vector<Renderer*> renderer_list;
 
+    // Adaptive sampling (render/adaptive.h) wherever its extra samples can follow the passes:
+    // not for a time budget (no sample count to add to), resumed or checkpointed renders (a
+    // checkpoint holds whole passes), several processes, zsobol (neighbouring pixels share a
+    // sequence) or strategy images; and from 8 spp on, below which a pixel's variance is too
+    // rough to plan from.
+    const bool adaptive = args.adaptive == "on" && options.time_budget <= 0 && options.spp >= kAdaptiveMinSpp &&
+                          !resumed && checkpoint_path.empty() && cluster.size() == 1 &&
+                          options.sampler != SamplerKind::ZSobol &&
+                          options.strategy_images == RenderOptions::StrategyImages::Off;
     RenderStats pilot_stats;
     StrategyPilot pilot;
     const std::string mix_note =
         resumed ? "as in checkpoint '" + args.resume + "' (" + std::to_string(resumed->film.spp) + " spp resumed)"
         : automatic && !mix_by_hand && leader
-            ? choose_strategy_mix(device, ds, &options, &pilot, &pilot_stats, &renderers)
+            ? choose_strategy_mix(device, ds, &options, adaptive, &pilot, &pilot_stats, &renderers)
             : "";
     // Every process renders with the leader's integrator and strategy mix.
     RenderPlan plan{int(options.integrator), options.light_subpaths, options.inner_connections ? 1 : 0};
@@ -481,15 +491,6 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
         std::fprintf(stderr, "\nclbdpt: warning: device %s; it left the render and its pass went to the others\n",
                      what.c_str());
     };
-    // Adaptive sampling (render/adaptive.h) wherever its extra samples can follow the passes:
-    // not for a time budget (no sample count to add to), resumed or checkpointed renders (a
-    // checkpoint holds whole passes), several processes, zsobol (neighbouring pixels share a
-    // sequence) or strategy images; and from 8 spp on, below which a pixel's variance is too
-    // rough to plan from.
-    const bool adaptive = args.adaptive == "on" && options.time_budget <= 0 && options.spp >= kAdaptiveMinSpp &&
-                          !resumed && checkpoint_path.empty() && cluster.size() == 1 &&
-                          options.sampler != SamplerKind::ZSobol &&
-                          options.strategy_images == RenderOptions::StrategyImages::Off;
     options.track_variance = adaptive;
     RenderStats st;
     const double seconds_before_passes = seconds_since(start) - pilot.seconds;
@@ -580,6 +581,8 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
                                            {"variance_transport_stratified", c.variance_transport_stratified},
                                            {"variance_shared_tail", c.variance_shared_tail},
                                            {"variance_pixel", c.variance_pixel},
+                                           {"adaptive_variance_left", c.adaptive_variance_left},
+                                           {"adaptive_extra_share", c.adaptive_extra_share},
                                            {"seconds_per_pass", c.seconds_per_pass},
                                            {"predicted_spp", c.predicted_spp},
                                            {"predicted_mse", c.predicted_mse},
@@ -657,11 +660,11 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
         for (const StrategyCandidate& c : pilot.candidates)
             std::fprintf(stderr,
                          "clbdpt: pilot: %-56s variance per sample: transport %.3g +- %.2g (stratified %.3g, "
-                         "shared tail %.3g, light image %.3g), pixel %.3g; %.3f s/pass; "
-                         "predicted MSE %.3g at %.0f spp; efficiency %.3g%s\n",
+                         "shared tail %.3g, light image %.3g), pixel %.3g; adaptive leaves %.2f for %.1f%% more "
+                         "samples; %.3f s/pass; predicted MSE %.3g at %.0f spp; efficiency %.3g%s\n",
                          c.name.c_str(), c.variance_transport, c.variance_transport_standard_error,
                          c.variance_transport_stratified, c.variance_shared_tail, c.variance_light_image,
-                         c.variance_pixel,
+                         c.variance_pixel, c.adaptive_variance_left, 100.0 * c.adaptive_extra_share,
                          c.seconds_per_pass, c.predicted_mse, c.predicted_spp, c.efficiency,
                          &c == &pilot.choice() ? "  <- chosen" : "");
     if (interrupted_by != 0) {

@@ -33,18 +33,9 @@ std::vector<double> sample_variances(const Film& film) {
 
 }  // namespace
 
-AdaptivePlan plan_adaptive_samples(const Film& film, int max_tier, double max_extra_share) {
-    AdaptivePlan plan;
-    plan.spp = film.spp;
-    plan.max_tier = std::clamp(max_tier, 0, 8);
-    const int w = film.width, h = film.height;
+std::vector<double> adaptive_neighbour_variances(const std::vector<double>& v, int w, int h) {
     const size_t pixels = size_t(w) * h;
-    plan.tier.assign(pixels, 0);
-    const std::vector<double> v = sample_variances(film);
-
-    // u_p: the second largest variance among p's neighbours (0 with fewer than two).
     std::vector<double> u(pixels, 0.0);
-    double u_sum = 0;
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) {
             double first = 0, second = 0;
@@ -61,25 +52,48 @@ AdaptivePlan plan_adaptive_samples(const Film& film, int max_tier, double max_ex
                     }
                 }
             u[size_t(y) * w + x] = second;
-            u_sum += second;
         }
-    if (pixels == 0 || !(u_sum > 0) || plan.max_tier == 0) return plan;
+    return u;
+}
+
+AdaptiveTiers adaptive_tiers(const std::vector<double>& u, int max_tier, int spp, double max_extra_share) {
+    AdaptiveTiers plan;
+    const size_t pixels = u.size();
+    plan.tier.assign(pixels, 0);
+    max_tier = std::clamp(max_tier, 0, 8);
+    double u_sum = 0;
+    for (double x : u) u_sum += x;
+    if (pixels == 0 || !(u_sum > 0) || max_tier == 0) return plan;
     plan.u_mean = u_sum / double(pixels);
 
-    const double budget = max_extra_share * double(film.spp) * double(pixels);
+    const double budget = max_extra_share * double(spp) * double(pixels);
     for (;;) {
         plan.extra_samples = 0;
         plan.pixels_refined = 0;
         for (size_t p = 0; p < pixels; ++p) {
             int k = 0;
-            for (double threshold = 4 * plan.u_mean; k < plan.max_tier && u[p] >= threshold; threshold *= 4) ++k;
+            for (double threshold = 4 * plan.u_mean; k < max_tier && u[p] >= threshold; threshold *= 4) ++k;
             plan.tier[p] = uint8_t(k);
-            plan.extra_samples += uint64_t(film.spp) * ((uint64_t(1) << k) - 1);
+            plan.extra_samples += uint64_t(spp) * ((uint64_t(1) << k) - 1);
             plan.pixels_refined += k > 0;
         }
         if (double(plan.extra_samples) <= budget) break;
         plan.u_mean *= 2;
     }
+    return plan;
+}
+
+AdaptivePlan plan_adaptive_samples(const Film& film, int max_tier, double max_extra_share) {
+    AdaptivePlan plan;
+    plan.spp = film.spp;
+    plan.max_tier = std::clamp(max_tier, 0, 8);
+    AdaptiveTiers tiers =
+        adaptive_tiers(adaptive_neighbour_variances(sample_variances(film), film.width, film.height), max_tier,
+                       film.spp, max_extra_share);
+    plan.tier = std::move(tiers.tier);
+    plan.extra_samples = tiers.extra_samples;
+    plan.pixels_refined = tiers.pixels_refined;
+    plan.u_mean = tiers.u_mean;
     return plan;
 }
 

@@ -46,8 +46,24 @@ struct AdaptivePlan {
     double u_mean = 0;            // the variance of a pixel of tier 0 and 1 meet at 4 u_mean
 };
 
+// The rule above in two steps, for plan_adaptive_samples and for the strategy pilot's prediction
+// of what the plan will do (render/strategy_pilot.h): u_p, the second largest of p's eight
+// neighbours' variances in an image of w x h per-pixel variances v; then the tiers for a render
+// of spp samples per pixel from any per-pixel u.
+struct AdaptiveTiers {
+    std::vector<uint8_t> tier;
+    uint64_t extra_samples = 0;
+    uint64_t pixels_refined = 0;
+    double u_mean = 0;
+};
+std::vector<double> adaptive_neighbour_variances(const std::vector<double>& v, int w, int h);
+AdaptiveTiers adaptive_tiers(const std::vector<double>& u, int max_tier, int spp, double max_extra_share);
+
 // The plan for a film of spp samples per pixel with camera_sq kept.
-AdaptivePlan plan_adaptive_samples(const Film& film, int max_tier = 4, double max_extra_share = 1.0);
+constexpr int kAdaptiveMaxTier = 4;
+constexpr double kAdaptiveMaxExtraShare = 1.0;
+AdaptivePlan plan_adaptive_samples(const Film& film, int max_tier = kAdaptiveMaxTier,
+                                   double max_extra_share = kAdaptiveMaxExtraShare);
 
 // Renders the plan's extra samples with `renderer` (whose options give the seed; the passes' own
 // or the path tracer) and adds them to the film's camera sums and extra_samples (setting

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <cstdio>
 
+#include "render/adaptive.h"
+
 namespace clbdpt {
 
 namespace {
@@ -188,6 +190,9 @@ GroupedVariance one_sample_variance(const GridPass& a, const GridPass& b) {
 struct SetVariances {
     GroupedVariance one, set;
     std::vector<double> one_terms;  // `one`'s term of each grid pixel
+    // Per grid pixel, the second largest of its n pairs' terms: high where the pixel's variance
+    // is (an outline, a highlight), not where one sample was a firefly.
+    std::vector<double> second_pair_terms;
 };
 SetVariances set_variances(const std::vector<GridPass>& passes, int n) {
     const GridPass* x = passes.data();
@@ -199,8 +204,18 @@ SetVariances set_variances(const std::vector<GridPass>& passes, int n) {
     }
     SetVariances v;
     for (int item = 0; item < x_sum.items(); ++item) {
-        double one = 0;
-        for (int j = 0; j < n; ++j) one += difference_term(x[j], y[j], item, 1.0);
+        double one = 0, first = 0, second = 0;
+        for (int j = 0; j < n; ++j) {
+            const double term = difference_term(x[j], y[j], item, 1.0);
+            one += term;
+            if (term > first) {
+                second = first;
+                first = term;
+            } else if (term > second) {
+                second = term;
+            }
+        }
+        v.second_pair_terms.push_back(second);
         v.one.add(item, one / n);
         v.one_terms.push_back(one / n);
         v.set.add(item, n * difference_term(x_sum, y_sum, item, 1.0 / n));
@@ -242,6 +257,26 @@ double standard_error_without_largest(std::vector<double> terms, double leave_ou
     GroupedVariance kept;
     for (size_t i = 0; i + dropped < terms.size(); ++i) kept.add(int(i), terms[i]);
     return kept.standard_error();
+}
+
+// What adaptive sampling would do to a candidate's camera image (run_strategy_pilot): the plan's
+// tiers (render/adaptive.h) from the grid's per-pixel `u`, applied to its per-pixel variances of
+// one sample, `terms`, for a render of spp samples per pixel.
+struct AdaptiveEffect {
+    double variance_left = 1.0;  // share of the terms' sum that the extra samples leave
+    double extra_share = 0.0;    // extra samples per sample of the render
+};
+AdaptiveEffect adaptive_effect(const std::vector<double>& terms, const std::vector<double>& u, int spp) {
+    AdaptiveEffect e;
+    double sum = 0;
+    for (double t : terms) sum += t;
+    if (!(sum > 0) || spp < kAdaptiveMinSpp || u.size() != terms.size()) return e;
+    const AdaptiveTiers tiers = adaptive_tiers(u, kAdaptiveMaxTier, spp, kAdaptiveMaxExtraShare);
+    double left = 0;
+    for (size_t p = 0; p < terms.size(); ++p) left += terms[p] / double(1u << tiers.tier[p]);
+    e.variance_left = left / sum;
+    e.extra_share = double(tiers.extra_samples) / (double(spp) * double(terms.size()));
+    return e;
 }
 
 // The candidate other than lt with the highest efficiency_transport_only: the figure lt must beat.
@@ -360,7 +395,7 @@ std::vector<double> shared_tail_terms(const std::vector<const std::vector<double
 }
 
 StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene, const RenderOptions& options,
-                                 int spp, double time_budget, RenderStats* stats) {
+                                 int spp, double time_budget, bool adaptive, RenderStats* stats) {
     using Clock = std::chrono::steady_clock;
     StrategyPilot pilot;
     pilot.candidates = strategy_candidates(light_tracing_is_a_candidate(scene));
@@ -464,14 +499,20 @@ StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene
         // cost 25x (without this, fog-spot at 128x128 got pt, 0.04-0.07x of bdpt's efficiency
         // there, in one of three pilots); so the part of each transport variance that falls as
         // 1/N (less the shared tail) counts kRiskStandardErrors standard errors high.
+        if (adaptive && spp > 0) {
+            const AdaptiveEffect a = adaptive_effect(t.one_terms, t.second_pair_terms, spp);
+            c.adaptive_variance_left = a.variance_left;
+            c.adaptive_extra_share = a.extra_share;
+        }
         const double risky_transport =
-            std::max(0.0, own.mean() + light.mean - c.variance_transport_stratified) +
+            std::max(0.0, (own.mean() - c.variance_transport_stratified) * c.adaptive_variance_left + light.mean) +
             kRiskStandardErrors * std::hypot(own_hedge_error, light.standard_error);
         const double transport_mse = risky_transport / n + c.variance_transport_stratified / (n * n);
         c.predicted_mse = transport_mse + c.variance_pixel / std::pow(n, kPixelVarianceExponent);
-        const double cost = c.predicted_mse * n * c.seconds_per_pass;
+        const double seconds = n * c.seconds_per_pass * (1.0 + c.adaptive_extra_share);
+        const double cost = c.predicted_mse * seconds;
         c.efficiency = cost > 0 ? 1.0 / cost : 0.0;
-        const double transport_cost = transport_mse * n * c.seconds_per_pass;
+        const double transport_cost = transport_mse * seconds;
         c.efficiency_transport_only = transport_cost > 0 ? 1.0 / transport_cost : 0.0;
     }
     pilot.chosen = choose_strategy_candidate(pilot.candidates);

@@ -64,6 +64,10 @@ struct StrategyCandidate {
     // the same large term: left out of the prediction (see run_strategy_pilot).
     double variance_shared_tail = 0;
     double variance_pixel = 0;
+    // With adaptive sampling: the share of the camera image's 1/N transport variance that its
+    // extra samples leave, and their number as a share of the render's samples (1 and 0 without).
+    double adaptive_variance_left = 1;
+    double adaptive_extra_share = 0;
     double seconds_per_pass = 0;    // a full pass, scaled from the sparse ones
     double predicted_spp = 0;       // what the render will reach (given, or from a time budget)
     double predicted_mse = 0;       // of the image at predicted_spp
@@ -152,12 +156,19 @@ std::vector<double> shared_tail_terms(const std::vector<const std::vector<double
 
 // Renders the pilot of every candidate on `device` (stats gain its samples, rays and build
 // time) and picks the candidate with the least predicted error x time at `spp` samples, or,
-// with time_budget > 0, the least predicted error after that many seconds. Light tracing must
-// also beat every other candidate's efficiency_transport_only: adaptive sampling lowers a camera
-// subpath's error below the pilot's prediction (pt on the Cornell box, median of 5 seeds: 1.64x
-// with stratification modelled, 4.85x before), but not the light image's (lt: within 3-16% on
-// lamp-ceiling).
+// with time_budget > 0, the least predicted error after that many seconds. With `adaptive`
+// (the render gets adaptive sampling, render/adaptive.h) each prediction takes in what the
+// plan will do to the candidate's camera image: the plan's tiers from each grid pixel's second
+// largest pair term (an outline or a highlight raises it, a lone firefly does not; the plan's
+// own rule, a pixel's neighbours, sees nothing on a grid whose pixels are k apart) give the
+// share of the camera image's 1/N variance left and the extra samples' cost. pt's predicted
+// error at 64 spp over the measured, medians of 4 seeds, before -> after: cornell-box 1.65 ->
+// 1.42, veach-mis 9.4 -> 2.5, lamp-ceiling 1.62 -> 1.35; the BDPT mixes' 0.89-1.09 but for
+// veach-mis's full BDPT and no-inner mix (0.88 -> 0.45).
+// Light tracing must also beat every other candidate's efficiency_transport_only: the light
+// image gets no extra samples, and a camera candidate may still be better than predicted (lt:
+// within 3-16% on lamp-ceiling).
 StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene, const RenderOptions& options,
-                                 int spp, double time_budget, RenderStats* stats);
+                                 int spp, double time_budget, bool adaptive, RenderStats* stats);
 
 }  // namespace clbdpt
