@@ -38,20 +38,14 @@ std::vector<double> adaptive_neighbour_variances(const std::vector<double>& v, i
     std::vector<double> u(pixels, 0.0);
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) {
-            double first = 0, second = 0;
+            LargestTwo neighbours;
             for (int dy = -1; dy <= 1; ++dy)
                 for (int dx = -1; dx <= 1; ++dx) {
                     const int nx = x + dx, ny = y + dy;
                     if ((dx == 0 && dy == 0) || nx < 0 || ny < 0 || nx >= w || ny >= h) continue;
-                    const double value = v[size_t(ny) * w + nx];
-                    if (value > first) {
-                        second = first;
-                        first = value;
-                    } else if (value > second) {
-                        second = value;
-                    }
+                    neighbours.add(v[size_t(ny) * w + nx]);
                 }
-            u[size_t(y) * w + x] = second;
+            u[size_t(y) * w + x] = neighbours.second;
         }
     return u;
 }

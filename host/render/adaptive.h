@@ -50,6 +50,20 @@ struct AdaptivePlan {
 // of what the plan will do (render/strategy_pilot.h): u_p, the second largest of p's eight
 // neighbours' variances in an image of w x h per-pixel variances v; then the tiers for a render
 // of spp samples per pixel from any per-pixel u.
+// The largest and second largest of the values added (0 while there are fewer): the second
+// is what one outlier cannot raise.
+struct LargestTwo {
+    double first = 0, second = 0;
+    void add(double value) {
+        if (value > first) {
+            second = first;
+            first = value;
+        } else if (value > second) {
+            second = value;
+        }
+    }
+};
+
 struct AdaptiveTiers {
     std::vector<uint8_t> tier;
     uint64_t extra_samples = 0;

@@ -204,18 +204,14 @@ SetVariances set_variances(const std::vector<GridPass>& passes, int n) {
     }
     SetVariances v;
     for (int item = 0; item < x_sum.items(); ++item) {
-        double one = 0, first = 0, second = 0;
+        double one = 0;
+        LargestTwo pairs;
         for (int j = 0; j < n; ++j) {
             const double term = difference_term(x[j], y[j], item, 1.0);
             one += term;
-            if (term > first) {
-                second = first;
-                first = term;
-            } else if (term > second) {
-                second = term;
-            }
+            pairs.add(term);
         }
-        v.second_pair_terms.push_back(second);
+        v.second_pair_terms.push_back(pairs.second);
         v.one.add(item, one / n);
         v.one_terms.push_back(one / n);
         v.set.add(item, n * difference_term(x_sum, y_sum, item, 1.0 / n));
@@ -494,16 +490,18 @@ StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene
         const double n = time_budget > 0 && c.seconds_per_pass > 0 ? std::max(1.0, time_budget / c.seconds_per_pass)
                                                                     : double(std::max(spp, 1));
         c.predicted_spp = n;
-        // Heavy tails (a path tracer's fireflies in fog) make a sparse grid's variance come out
-        // low more often than high, and a candidate chosen for a variance it does not have can
-        // cost 25x (without this, fog-spot at 128x128 got pt, 0.04-0.07x of bdpt's efficiency
-        // there, in one of three pilots); so the part of each transport variance that falls as
-        // 1/N (less the shared tail) counts kRiskStandardErrors standard errors high.
+        // With adaptive sampling, what its plan leaves of the camera image's 1/N variance (the
+        // terms below), for what extra samples (their time counts).
         if (adaptive && spp > 0) {
             const AdaptiveEffect a = adaptive_effect(t.one_terms, t.second_pair_terms, spp);
             c.adaptive_variance_left = a.variance_left;
             c.adaptive_extra_share = a.extra_share;
         }
+        // Heavy tails (a path tracer's fireflies in fog) make a sparse grid's variance come out
+        // low more often than high, and a candidate chosen for a variance it does not have can
+        // cost 25x (without this, fog-spot at 128x128 got pt, 0.04-0.07x of bdpt's efficiency
+        // there, in one of three pilots); so the part of each transport variance that falls as
+        // 1/N (less the shared tail) counts kRiskStandardErrors standard errors high.
         const double risky_transport =
             std::max(0.0, (own.mean() - c.variance_transport_stratified) * c.adaptive_variance_left + light.mean) +
             kRiskStandardErrors * std::hypot(own_hedge_error, light.standard_error);
