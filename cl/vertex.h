@@ -185,6 +185,33 @@ inline float convert_density(const SceneData* scene, const PathVertex* v, float 
     return pdf_w * inv_d2;
 }
 
+/* Density of `next` sampled from v by a solid-angle density pdf_w at v, where `next` is a
+ * specular vertex: the first of a chain of specular vertices that the path enters from v. Such
+ * a chain joins v to the non-specular vertex u at its other end through a generalised geometric
+ * term G(v, u) = |cos_v| |d w_v / d A_u| = |cos_u| |d w_u / d A_v| (Veach 8.3; with both ends in
+ * the same index of refraction), so u's area density through the chain is pdf_w G / |cos_v|,
+ * and the strategy sampling the chain from u's end has the same G. G cancels in every ratio of
+ * the MIS recursion, and the chain's entry vertex takes pdf_w / |cos_v|, its projected
+ * solid-angle density (no cosine off surfaces: camera, point light, medium); the chain's other
+ * vertices keep the remap0 convention. pbrt-v3 instead converts pdf_w to area at the chain's
+ * first vertex, which swaps G for the first segment's cosine over distance squared on each side:
+ * on cornell-specular's floor caustic (light, glass sphere, floor 0.1-0.3 from it, camera) that
+ * underweighted light tracing about 30x against the camera path hitting the light. */
+inline float specular_chain_entry_density(const PathVertex* v, float pdf_w, const PathVertex* next) {
+    if (!vertex_on_surface(v)) return pdf_w;
+    float3 w = next->p - v->p;
+    float d2 = length_squared(w);
+    if (d2 == 0.0f) return 0.0f;
+    float cos_v = fabs(dot(v->ng, w * rsqrt(d2)));
+    return cos_v > 0.0f ? pdf_w / cos_v : 0.0f;
+}
+
+/* Density of `next` sampled from v by a solid-angle density pdf_w at v: area measure
+ * (convert_density), or, where `next` is specular, that of a specular chain's entry vertex. */
+inline float density_toward(const SceneData* scene, const PathVertex* v, float pdf_w, const PathVertex* next) {
+    return next->delta ? specular_chain_entry_density(v, pdf_w, next) : convert_density(scene, v, pdf_w, next);
+}
+
 /* Veach's adjoint correction for shading normals on importance-transport paths
  * (pbrt-v3 eq. 16.18): |wo.ns| |wi.ng| / (|wo.ng| |wi.ns|). */
 inline float correct_shading_normal(const PathVertex* v, float3 wo, float3 wi, int mode) {
@@ -242,7 +269,8 @@ inline float infinite_light_density(const SceneData* scene, float3 w) {
 #endif
 }
 
-/* Area density at `next` of light vertex v emitting toward it (pbrt Vertex::PdfLight). */
+/* Area density at `next` of light vertex v emitting toward it (pbrt Vertex::PdfLight); for a
+ * specular `next`, a specular chain's entry density (specular_chain_entry_density). */
 inline float vertex_pdf_light(const SceneData* scene, const PathVertex* v, const PathVertex* next) {
     float3 w = next->p - v->p;
     float d2 = length_squared(w);
@@ -256,9 +284,12 @@ inline float vertex_pdf_light(const SceneData* scene, const PathVertex* v, const
          * for these lights, without the lookup of the direction's density it would add). */
         float r = scene_radius(scene);
         pdf = 1.0f / (PI_F * r * r);
+        /* A specular chain's entry: the disk's density is already one per projected area. */
+        if (next->delta) return pdf;
     } else {
         float pdf_pos, pdf_dir;
         light_pdf_le(scene, v->light, v->ng, w, &pdf_pos, &pdf_dir);
+        if (next->delta) return specular_chain_entry_density(v, pdf_dir, next);
         pdf = pdf_dir * inv_d2;
     }
     if (vertex_on_surface(next)) pdf *= fabs(dot(next->ng, w));
@@ -280,7 +311,8 @@ inline float vertex_pdf_light_origin(const SceneData* scene, const PathVertex* v
 }
 
 /* Area density at `next` of sampling it from v, which was reached from `prev` (prev may be
- * null for camera and light vertices) (pbrt Vertex::Pdf). */
+ * null for camera and light vertices) (pbrt Vertex::Pdf); for a specular `next`, a specular
+ * chain's entry density (specular_chain_entry_density). */
 inline float vertex_pdf(const SceneData* scene, const PathVertex* v, const PathVertex* prev, const PathVertex* next) {
     if (v->type == VERTEX_LIGHT) return vertex_pdf_light(scene, v, next);
     float3 wn = next->p - v->p;
@@ -298,7 +330,7 @@ inline float vertex_pdf(const SceneData* scene, const PathVertex* v, const PathV
         wp *= rsqrt(dp2);
         pdf_w = vertex_scatter_pdf(scene, v, wp, wn);
     }
-    return convert_density(scene, v, pdf_w, next);
+    return density_toward(scene, v, pdf_w, next);
 }
 
 /* Whether nothing blocks the segment between two vertices. Both ends leave their surfaces by

@@ -127,7 +127,7 @@ inline int random_walk(const SceneData* scene, Rng* rng, float3 o, float3 d, flo
 #if STRATEGIES_READ_SUBPATH_PDF_REV
             float pdf_rev;
             vertex_scatter_pdfs(scene, prev, prev->wo, w, &pdf_fwd, &pdf_rev);
-            path[i - 2].pdf_rev = convert_density(scene, prev, pdf_rev, &path[i - 2]);
+            path[i - 2].pdf_rev = density_toward(scene, prev, pdf_rev, &path[i - 2]);
 #ifdef HAS_MEDIA
             path[i - 2].pdf_rev *= prev->dist_rev;
 #endif
@@ -135,6 +135,8 @@ inline int random_walk(const SceneData* scene, Rng* rng, float3 o, float3 d, flo
             pdf_fwd = vertex_scatter_pdf(scene, prev, prev->wo, w);
 #endif
         }
+        /* Kept in solid angle too, for when this vertex turns out specular (below). */
+        const float pdf_w_toward_vertex = pdf_fwd;
         vertex->pdf_fwd = convert_density(scene, prev, pdf_fwd, vertex);
 #ifdef HAS_MEDIA
         vertex->pdf_fwd *= vertex->dist_fwd;
@@ -172,6 +174,14 @@ inline int random_walk(const SceneData* scene, Rng* rng, float3 o, float3 d, flo
         if (bs.specular) {
             /* A delta lobe has no density to compare with (seed 5.4.2): both are 0. */
             vertex->delta = 1;
+            /* The first vertex of a specular chain: its density is a chain entry's (cl/vertex.h,
+             * specular_chain_entry_density); past the chain's first vertex remap0 holds. */
+            if (!prev->delta) {
+                vertex->pdf_fwd = specular_chain_entry_density(prev, pdf_w_toward_vertex, vertex);
+#ifdef HAS_MEDIA
+                vertex->pdf_fwd *= vertex->dist_fwd;
+#endif
+            }
             pdf_fwd = 0.0f;
             prev->pdf_rev = 0.0f;
         }
@@ -244,7 +254,8 @@ inline int generate_light_subpath(const SceneData* scene, Rng* rng, int max_dept
          * vertex's own density is the direction's (seed ch. 6). */
         if (n > 0) {
             path[1].pdf_fwd = er.pdf_pos;
-            if (vertex_on_surface(&path[1])) path[1].pdf_fwd *= fabs(dot(er.dir, path[1].ng));
+            /* (The disk's density is per projected area: a specular chain's entry keeps it.) */
+            if (vertex_on_surface(&path[1]) && !path[1].delta) path[1].pdf_fwd *= fabs(dot(er.dir, path[1].ng));
 #ifdef HAS_MEDIA
             path[1].pdf_fwd *= path[1].dist_fwd;
 #endif

@@ -33,10 +33,15 @@
 //    generate_ray or Sample_Wi, uniformly on the lens; a pinhole's delta likewise), so it
 //    cancels; so do a point/spot light's delta position and a directional light's delta
 //    direction, shared by every strategy that can produce such a path (s >= 1);
-//  - a vertex sampled through a specular (delta) vertex has density 1 in every strategy that
-//    samples it so (remap0: the delta and its geometric factors are dropped on both sides, as
-//    pbrt-v3 does); strategies whose connection touches a specular vertex cannot produce the
-//    path;
+//  - a chain of specular (delta) vertices between non-specular vertices u and v is sampled
+//    from either end with the same generalised geometric term G(u, v) (Veach 8.3), so the
+//    strategies' densities are compared up to that common factor: the chain's entry vertex
+//    (its first from the side sampling it) has the projected solid-angle density at the vertex
+//    it is entered from, pdf_w / |cos| there (no cosine off surfaces; the bounding disk's
+//    density alone for a light at infinity), and every vertex sampled through a specular vertex
+//    has density 1 (remap0: the delta dropped on both sides). pbrt-v3 converts to area at the
+//    chain's first vertex instead, which the test fails. Strategies whose connection touches a
+//    specular vertex cannot produce the path;
 //  - light selection: the light's select_pdf, for Sample_Le and Sample_Li alike;
 //  - a density 0 that is not a delta's (a vertex whose neighbours straddle its shading normal's
 //    plane: the BSDF's density is 0 both ways through it) means the strategies sampling through
@@ -306,6 +311,19 @@ double to_area(double pdf_w, const HostVertex& from, const HostVertex& to, bool 
 
 D3 dir(const HostVertex& from, const HostVertex& to) { return normalize(to.p - from.p); }
 
+// Density of a specular chain's entry vertex `to` (the file comment): the solid-angle density
+// at `from` over |cos| there, with no cosine off surfaces.
+double to_chain_entry(double pdf_w, const HostVertex& from, const HostVertex& to) {
+    if (is_zero(from.ng)) return pdf_w;
+    double c = std::fabs(dot(from.ng, dir(from, to)));
+    return c > 0 ? pdf_w / c : 0.0;
+}
+
+// Density at `to` of a solid-angle density at `from`: area measure, or a chain entry's.
+double toward(double pdf_w, const HostVertex& from, const HostVertex& to, bool to_at_infinity) {
+    return to.specular ? to_chain_entry(pdf_w, from, to) : to_area(pdf_w, from, to, to_at_infinity);
+}
+
 struct Densities {
     // cam[i]: density of x_i sampled by the camera subpath (i >= 1); light[j]: by the light
     // subpath (j <= n-1; light[n-1] is the light vertex's own, light[n-2] the emission's).
@@ -343,11 +361,11 @@ Densities densities(const Reference& ref, const Path& path) {
     for (int i = 1; i < n; ++i) {
         bool to_infinite = i == n - 1 && infinite;
         if (i == 1) {
-            d.cam[i] = to_area(ref.camera_pdf_dir(x[0].p, dir(x[0], x[1])), x[0], x[1], to_infinite);
+            d.cam[i] = toward(ref.camera_pdf_dir(x[0].p, dir(x[0], x[1])), x[0], x[1], to_infinite);
         } else if (x[i - 1].specular) {
             d.cam[i] = 1;
         } else {
-            d.cam[i] = to_area(scatter_pdf(ref, x[i - 1], x[i - 2], x[i]), x[i - 1], x[i], to_infinite);
+            d.cam[i] = toward(scatter_pdf(ref, x[i - 1], x[i - 2], x[i]), x[i - 1], x[i], to_infinite);
         }
     }
     d.toward.assign(n, 1.0);
@@ -364,34 +382,33 @@ Densities densities(const Reference& ref, const Path& path) {
         const Triangle& t = ref.ds.triangles[L.triangle];
         double area = 0.5 * length(cross(d3(t.p1) - d3(t.p0), d3(t.p2) - d3(t.p0)));
         d.light[n - 1] = L.select_pdf / area;
-        d.light[n - 2] = to_area(std::max(0.0, dot(lv.ng, -w_light)) / kPi, lv, x[n - 2], false);
+        d.light[n - 2] = toward(std::max(0.0, dot(lv.ng, -w_light)) / kPi, lv, x[n - 2], false);
         break;
     }
     case LIGHT_POINT:
         d.light[n - 1] = L.select_pdf;  // times the delta position, common to every strategy
-        d.light[n - 2] = to_area(1 / (4 * kPi), lv, x[n - 2], false);
+        d.light[n - 2] = toward(1 / (4 * kPi), lv, x[n - 2], false);
         break;
     case LIGHT_SPOT:
         d.light[n - 1] = L.select_pdf;
-        d.light[n - 2] = to_area(dot(-w_light, d3(L.direction)) >= 1 - double(L.one_minus_cos_total)
-                                     ? 1 / (2 * kPi * double(L.one_minus_cos_total))
-                                     : 0.0,
-                                 lv, x[n - 2], false);
+        d.light[n - 2] = toward(dot(-w_light, d3(L.direction)) >= 1 - double(L.one_minus_cos_total)
+                                    ? 1 / (2 * kPi * double(L.one_minus_cos_total))
+                                    : 0.0,
+                                lv, x[n - 2], false);
         break;
     case LIGHT_DIRECTIONAL:
-        d.light[n - 1] = L.select_pdf;  // times the delta direction, common to every strategy
-        d.light[n - 2] = std::fabs(dot(x[n - 2].ng, w_light)) / (kPi * ref.radius * ref.radius);
-        break;
     case LIGHT_ENVIRONMENT:
-        d.light[n - 1] = L.select_pdf * ref.env_pdf(w_light);  // solid angle
-        d.light[n - 2] = std::fabs(dot(x[n - 2].ng, w_light)) / (kPi * ref.radius * ref.radius);
+        // The bounding disk's density per projected area: a chain entry keeps it as it is.
+        d.light[n - 1] = L.kind == LIGHT_DIRECTIONAL ? L.select_pdf  // times the delta direction, common to every strategy
+                                                     : L.select_pdf * ref.env_pdf(w_light);  // solid angle
+        d.light[n - 2] = (x[n - 2].specular ? 1.0 : std::fabs(dot(x[n - 2].ng, w_light))) / (kPi * ref.radius * ref.radius);
         break;
     }
     for (int j = n - 3; j >= 1; --j) {
         if (x[j + 1].specular) {
             d.light[j] = 1;
         } else {
-            d.light[j] = to_area(scatter_pdf(ref, x[j + 1], x[j + 2], x[j]), x[j + 1], x[j], false);
+            d.light[j] = toward(scatter_pdf(ref, x[j + 1], x[j + 2], x[j]), x[j + 1], x[j], false);
         }
     }
     for (int j = 0; j + 1 < n; ++j) d.light[j] *= d.away[j + 1];
