@@ -1,8 +1,9 @@
 /* Subpath generation (seed ch. 4; pbrt-v3 RandomWalk, GenerateCameraSubpath,
  * GenerateLightSubpath). Each new vertex gets pdf_fwd (area measure, or solid angle toward an
- * infinite light) and fills in its predecessor's pdf_rev; specular vertices are marked delta
- * with both densities 0 (seed 5.4.2). Light subpaths carry importance and use the adjoint
- * BSDF (shading-normal correction, no 1/eta^2 on refraction). */
+ * infinite light) and fills in its predecessor's pdf_rev; specular vertices are marked delta,
+ * the densities of the vertices next to them are 0 (remap0, seed 5.4.2), and the first vertex
+ * of a specular chain takes a chain entry's density (cl/vertex.h). Light subpaths carry
+ * importance and use the adjoint BSDF (shading-normal correction, no 1/eta^2 on refraction). */
 #ifndef CLBDPT_WALK_H
 #define CLBDPT_WALK_H
 
