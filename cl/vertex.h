@@ -188,9 +188,10 @@ inline float convert_density(const SceneData* scene, const PathVertex* v, float 
 /* Density of `next` sampled from v by a solid-angle density pdf_w at v, where `next` is a
  * specular vertex: the first of a chain of specular vertices that the path enters from v. Such
  * a chain joins v to the non-specular vertex u at its other end through a generalised geometric
- * term G(v, u) = |cos_v| |d w_v / d A_u| = |cos_u| |d w_u / d A_v| (Veach 8.3; with both ends in
- * the same index of refraction), so u's area density through the chain is pdf_w G / |cos_v|,
- * and the strategy sampling the chain from u's end has the same G. G cancels in every ratio of
+ * term G(v, u) = |cos_v| |d w_v / d A_u| = |cos_u| |d w_u / d A_v| (Jakob & Marschner 2012,
+ * "Manifold exploration"; with both ends in the same index of refraction), so u's area density
+ * through the chain is pdf_w G / |cos_v|, and the strategy sampling the chain from u's end has
+ * the same G. G cancels in every ratio of
  * the MIS recursion, and the chain's entry vertex takes pdf_w / |cos_v|, its projected
  * solid-angle density (no cosine off surfaces: camera, point light, medium); the chain's other
  * vertices keep the remap0 convention. pbrt-v3 instead converts pdf_w to area at the chain's

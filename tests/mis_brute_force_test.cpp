@@ -34,14 +34,14 @@
 //    cancels; so do a point/spot light's delta position and a directional light's delta
 //    direction, shared by every strategy that can produce such a path (s >= 1);
 //  - a chain of specular (delta) vertices between non-specular vertices u and v is sampled
-//    from either end with the same generalised geometric term G(u, v) (Veach 8.3), so the
-//    strategies' densities are compared up to that common factor: the chain's entry vertex
-//    (its first from the side sampling it) has the projected solid-angle density at the vertex
-//    it is entered from, pdf_w / |cos| there (no cosine off surfaces; the bounding disk's
-//    density alone for a light at infinity), and every vertex sampled through a specular vertex
-//    has density 1 (remap0: the delta dropped on both sides). pbrt-v3 converts to area at the
-//    chain's first vertex instead, which the test fails. Strategies whose connection touches a
-//    specular vertex cannot produce the path;
+//    from either end with the same generalised geometric term G(u, v) (Jakob & Marschner
+//    2012), so the strategies' densities are compared up to that common factor: the chain's
+//    entry vertex (its first from the side sampling it) has the projected solid-angle density
+//    at the vertex it is entered from, pdf_w / |cos| there (no cosine off surfaces; the
+//    bounding disk's density alone for a light at infinity), and every vertex sampled through a
+//    specular vertex has density 1 (remap0: the delta dropped on both sides). pbrt-v3 converts
+//    to area at the chain's first vertex instead, which the test fails. Strategies whose
+//    connection touches a specular vertex cannot produce the path;
 //  - light selection: the light's select_pdf, for Sample_Le and Sample_Li alike;
 //  - a density 0 that is not a delta's (a vertex whose neighbours straddle its shading normal's
 //    plane: the BSDF's density is 0 both ways through it) means the strategies sampling through
@@ -397,12 +397,15 @@ Densities densities(const Reference& ref, const Path& path) {
                                 lv, x[n - 2], false);
         break;
     case LIGHT_DIRECTIONAL:
-    case LIGHT_ENVIRONMENT:
-        // The bounding disk's density per projected area: a chain entry keeps it as it is.
-        d.light[n - 1] = L.kind == LIGHT_DIRECTIONAL ? L.select_pdf  // times the delta direction, common to every strategy
-                                                     : L.select_pdf * ref.env_pdf(w_light);  // solid angle
-        d.light[n - 2] = (x[n - 2].specular ? 1.0 : std::fabs(dot(x[n - 2].ng, w_light))) / (kPi * ref.radius * ref.radius);
+    case LIGHT_ENVIRONMENT: {
+        // Directional: times the delta direction, common to every strategy; environment: solid
+        // angle.
+        d.light[n - 1] = L.select_pdf * (L.kind == LIGHT_DIRECTIONAL ? 1.0 : ref.env_pdf(w_light));
+        // The bounding disk's density is per projected area: a chain entry keeps it as it is.
+        double cos_first = x[n - 2].specular ? 1.0 : std::fabs(dot(x[n - 2].ng, w_light));
+        d.light[n - 2] = cos_first / (kPi * ref.radius * ref.radius);
         break;
+    }
     }
     for (int j = n - 3; j >= 1; --j) {
         if (x[j + 1].specular) {
