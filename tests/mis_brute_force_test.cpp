@@ -870,6 +870,89 @@ void check_integrator(Integrator integrator, bool thin, uint64_t seed, Mix mix =
         EXPECT_NEAR(sums[j], 1.0, kSumTolerance) << integrator_name(integrator) << " path " << j;
 }
 
+// ---- The chain convention against the densities it stands for ----------------------------------
+
+// A ray through a glass sphere (refracted in and out, index 1.5 in air) onto the plane
+// dot(p, plane_n) = plane_d: the landing point, and the chain's two sphere points.
+struct SphereChain {
+    D3 center{0, 0.3, 0};
+    double radius = 0.3, eta = 1.5;
+
+    // Far (inside = true) or near intersection of o + t d with the sphere.
+    double hit(D3 o, D3 d, bool inside) const {
+        D3 oc = o - center;
+        double b = dot(oc, d), c = dot(oc, oc) - radius * radius, disc = b * b - c;
+        if (disc < 0) return -1;
+        return inside ? -b + std::sqrt(disc) : -b - std::sqrt(disc);
+    }
+    static D3 refract(D3 d, D3 n, double eta_ratio) {  // n against d; eta_ratio = eta_i / eta_t
+        double cos_i = -dot(n, d), k = 1 - eta_ratio * eta_ratio * (1 - cos_i * cos_i);
+        EXPECT_GT(k, 0) << "total internal reflection in the test's chain";
+        return normalize(d * eta_ratio + n * (eta_ratio * cos_i - std::sqrt(std::max(k, 0.0))));
+    }
+    D3 trace(D3 o, D3 d, D3 plane_n, double plane_d, D3* s1 = nullptr, D3* s2 = nullptr) const {
+        double t = hit(o, d, false);
+        EXPECT_GT(t, 0) << "the test's ray misses the sphere";
+        D3 a = o + d * t;
+        d = refract(d, normalize(a - center), 1 / eta);
+        D3 b = a + d * hit(a, d, true);
+        d = refract(d, -normalize(b - center), eta);
+        if (s1) *s1 = a;
+        if (s2) *s2 = b;
+        return b + d * ((plane_d - dot(b, plane_n)) / dot(d, plane_n));
+    }
+    // |dA / dw| of where the chain lands per solid angle around direction d (finite differences).
+    double area_per_solid_angle(D3 o, D3 d, D3 plane_n, double plane_d) const {
+        const double eps = 1e-6;
+        D3 t1 = normalize(cross(d, std::fabs(d.x) < 0.9 ? D3(1, 0, 0) : D3(0, 1, 0))), t2 = cross(d, t1);
+        D3 p0 = trace(o, d, plane_n, plane_d);
+        D3 p1 = trace(o, normalize(d + t1 * eps), plane_n, plane_d);
+        D3 p2 = trace(o, normalize(d + t2 * eps), plane_n, plane_d);
+        return length(cross(p1 - p0, p2 - p0)) / (eps * eps);
+    }
+};
+
+// Through a glass sphere resting on a floor (cornell-specular's caustic: a floor point D, a light
+// point y above), the densities each side's sampling gives the other end, computed from the
+// chain's Jacobians, have the ratio that the chain's entry densities give (so the MIS weights
+// are the balance heuristic's), and not the ratio of pbrt-v3's convention.
+TEST(MisBruteForce, ChainEntryDensitiesAreExactThroughGlass) {
+    const SphereChain glass;
+    const D3 floor_n(0, 1, 0), light_n(0, -1, 0);
+    const double light_height = 1.5;
+    HostVertex D;
+    D.p = D3(0.25, 0, 0.05);
+    D.ng = D.ns = floor_n;
+    D3 w_D = normalize(D3(0.05, 0.32, -0.02) - D.p);
+    D3 s1, s2;
+    HostVertex y;
+    y.p = glass.trace(D.p, w_D, floor_n, light_height, &s1, &s2);
+    y.ng = y.ns = light_n;
+    D3 w_y = normalize(s2 - y.p);
+    ASSERT_LT(length(glass.trace(y.p, w_y, floor_n, 0.0) - D.p), 1e-9) << "the reversed chain must return to D";
+
+    // Generalised geometric term from either end: the same (both ends in air).
+    double cos_D = std::fabs(dot(floor_n, w_D)), cos_y = std::fabs(dot(light_n, w_y));
+    double dA_y_dw_D = glass.area_per_solid_angle(D.p, w_D, floor_n, light_height);
+    double dA_D_dw_y = glass.area_per_solid_angle(y.p, w_y, floor_n, 0.0);
+    EXPECT_LT(rel_diff(cos_D / dA_y_dw_D, cos_y / dA_D_dw_y), 1e-3);
+
+    // Each side's density of the other end: a solid-angle density times the chain's Jacobian.
+    const double pdf_w_D = 0.7, pdf_w_y = 0.3;
+    double true_ratio = (pdf_w_y / dA_D_dw_y) / (pdf_w_D / dA_y_dw_D);  // p(D | y) / p(y | D)
+    HostVertex first_from_D, first_from_y;  // the chain's entry vertex from either side
+    first_from_D.p = s1;
+    first_from_D.ng = normalize(s1 - glass.center);
+    first_from_D.specular = true;
+    first_from_y.p = s2;
+    first_from_y.ng = normalize(s2 - glass.center);
+    first_from_y.specular = true;
+    double entry_ratio = toward(pdf_w_y, y, first_from_y, false) / toward(pdf_w_D, D, first_from_D, false);
+    EXPECT_LT(rel_diff(entry_ratio, true_ratio), 1e-3);
+    double pbrt_ratio = to_area(pdf_w_y, y, first_from_y, false) / to_area(pdf_w_D, D, first_from_D, false);
+    EXPECT_GT(std::fabs(std::log(pbrt_ratio / true_ratio)), std::log(2.0)) << "pbrt's ratio " << pbrt_ratio;
+}
+
 TEST(MisBruteForce, BdptPinhole) { check_integrator(Integrator::Bdpt, false, 101); }
 TEST(MisBruteForce, BdptThinLens) { check_integrator(Integrator::Bdpt, true, 102); }
 TEST(MisBruteForce, PtPinhole) { check_integrator(Integrator::Pt, false, 103); }
