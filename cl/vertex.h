@@ -188,29 +188,35 @@ inline float convert_density(const SceneData* scene, const PathVertex* v, float 
 /* Density of `next` sampled from v by a solid-angle density pdf_w at v, where `next` is a
  * specular vertex: the first of a chain of specular vertices that the path enters from v. Such
  * a chain joins v to the non-specular vertex u at its other end through a generalised geometric
- * term G(v, u) = |cos_v| |d w_v / d A_u| = |cos_u| |d w_u / d A_v| (Jakob & Marschner 2012,
- * "Manifold exploration"; with both ends in the same index of refraction), so u's area density
- * through the chain is pdf_w G / |cos_v|, and the strategy sampling the chain from u's end has
- * the same G. G cancels in every ratio of
- * the MIS recursion, and the chain's entry vertex takes pdf_w / |cos_v|, its projected
- * solid-angle density (no cosine off surfaces: camera, point light, medium); the chain's other
- * vertices keep the remap0 convention. pbrt-v3 instead converts pdf_w to area at the chain's
+ * term G(v, u) = eta_v^2 |cos_v| |d w_v / d A_u| = eta_u^2 |cos_u| |d w_u / d A_v| (Jakob &
+ * Marschner 2012, "Manifold exploration"; eta: the index of refraction each end lies in, as
+ * etendue is conserved), so u's area density through the chain is pdf_w G / (eta_v^2 |cos_v|),
+ * and the strategy sampling the chain from u's end has the same G. G cancels in every ratio of
+ * the MIS recursion, and the chain's entry vertex takes pdf_w / (eta_v^2 |cos_v|), its
+ * projected solid-angle density scaled by eta_v^2 (no cosine off surfaces: camera, point light,
+ * medium). eta_v is the glass's index where the chain enters glass through its back face (v is
+ * inside), else 1: a chain that starts inside one glass and enters another is not told apart.
+ * The chain's other vertices keep the remap0 convention. pbrt-v3 instead converts pdf_w to area at the chain's
  * first vertex, which swaps G for the first segment's cosine over distance squared on each side:
  * on cornell-specular's floor caustic (light, glass sphere, floor 0.1-0.3 from it, camera) that
  * underweighted light tracing about 30x against the camera path hitting the light. */
-inline float specular_chain_entry_density(const PathVertex* v, float pdf_w, const PathVertex* next) {
-    if (!vertex_on_surface(v)) return pdf_w;
+inline float specular_chain_entry_density(const SceneData* scene, const PathVertex* v, float pdf_w,
+                                          const PathVertex* next) {
     float3 w = next->p - v->p;
     float d2 = length_squared(w);
     if (d2 == 0.0f) return 0.0f;
-    float cos_v = fabs(dot(v->ng, w * rsqrt(d2)));
+    w *= rsqrt(d2);
+    __global const Material* m = &scene->materials[next->material];
+    if (m->kind == MATERIAL_GLASS && dot(w, next->ng) > 0.0f) pdf_w /= m->ior * m->ior;
+    if (!vertex_on_surface(v)) return pdf_w;
+    float cos_v = fabs(dot(v->ng, w));
     return cos_v > 0.0f ? pdf_w / cos_v : 0.0f;
 }
 
 /* Density of `next` sampled from v by a solid-angle density pdf_w at v: area measure
  * (convert_density), or, where `next` is specular, that of a specular chain's entry vertex. */
 inline float density_toward(const SceneData* scene, const PathVertex* v, float pdf_w, const PathVertex* next) {
-    return next->delta ? specular_chain_entry_density(v, pdf_w, next) : convert_density(scene, v, pdf_w, next);
+    return next->delta ? specular_chain_entry_density(scene, v, pdf_w, next) : convert_density(scene, v, pdf_w, next);
 }
 
 /* Veach's adjoint correction for shading normals on importance-transport paths
@@ -290,7 +296,7 @@ inline float vertex_pdf_light(const SceneData* scene, const PathVertex* v, const
     } else {
         float pdf_pos, pdf_dir;
         light_pdf_le(scene, v->light, v->ng, w, &pdf_pos, &pdf_dir);
-        if (next->delta) return specular_chain_entry_density(v, pdf_dir, next);
+        if (next->delta) return specular_chain_entry_density(scene, v, pdf_dir, next);
         pdf = pdf_dir * inv_d2;
     }
     if (vertex_on_surface(next)) pdf *= fabs(dot(next->ng, w));

@@ -178,7 +178,7 @@ inline int random_walk(const SceneData* scene, Rng* rng, float3 o, float3 d, flo
             /* The first vertex of a specular chain: its density is a chain entry's (cl/vertex.h,
              * specular_chain_entry_density); past the chain's first vertex remap0 holds. */
             if (!prev->delta) {
-                vertex->pdf_fwd = specular_chain_entry_density(prev, pdf_w_toward_vertex, vertex);
+                vertex->pdf_fwd = specular_chain_entry_density(scene, prev, pdf_w_toward_vertex, vertex);
 #ifdef HAS_MEDIA
                 vertex->pdf_fwd *= vertex->dist_fwd;
 #endif

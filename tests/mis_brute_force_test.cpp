@@ -312,16 +312,20 @@ double to_area(double pdf_w, const HostVertex& from, const HostVertex& to, bool 
 D3 dir(const HostVertex& from, const HostVertex& to) { return normalize(to.p - from.p); }
 
 // Density of a specular chain's entry vertex `to` (the file comment): the solid-angle density
-// at `from` over |cos| there, with no cosine off surfaces.
-double to_chain_entry(double pdf_w, const HostVertex& from, const HostVertex& to) {
+// at `from` over |cos| there (no cosine off surfaces), and over glass_ior^2 where `to` is glass
+// that the chain enters through its back face (`from` inside it); glass_ior 0: `to` is no glass.
+double to_chain_entry(double pdf_w, const HostVertex& from, const HostVertex& to, double glass_ior) {
+    if (glass_ior > 0 && dot(dir(from, to), to.ng) > 0) pdf_w /= glass_ior * glass_ior;
     if (is_zero(from.ng)) return pdf_w;
     double c = std::fabs(dot(from.ng, dir(from, to)));
     return c > 0 ? pdf_w / c : 0.0;
 }
 
 // Density at `to` of a solid-angle density at `from`: area measure, or a chain entry's.
-double toward(double pdf_w, const HostVertex& from, const HostVertex& to, bool to_at_infinity) {
-    return to.specular ? to_chain_entry(pdf_w, from, to) : to_area(pdf_w, from, to, to_at_infinity);
+double toward(const Reference& ref, double pdf_w, const HostVertex& from, const HostVertex& to, bool to_at_infinity) {
+    if (!to.specular) return to_area(pdf_w, from, to, to_at_infinity);
+    const Material& m = ref.ds.materials[size_t(to.material)];
+    return to_chain_entry(pdf_w, from, to, m.kind == MATERIAL_GLASS ? double(m.ior) : 0.0);
 }
 
 struct Densities {
@@ -361,11 +365,11 @@ Densities densities(const Reference& ref, const Path& path) {
     for (int i = 1; i < n; ++i) {
         bool to_infinite = i == n - 1 && infinite;
         if (i == 1) {
-            d.cam[i] = toward(ref.camera_pdf_dir(x[0].p, dir(x[0], x[1])), x[0], x[1], to_infinite);
+            d.cam[i] = toward(ref, ref.camera_pdf_dir(x[0].p, dir(x[0], x[1])), x[0], x[1], to_infinite);
         } else if (x[i - 1].specular) {
             d.cam[i] = 1;
         } else {
-            d.cam[i] = toward(scatter_pdf(ref, x[i - 1], x[i - 2], x[i]), x[i - 1], x[i], to_infinite);
+            d.cam[i] = toward(ref, scatter_pdf(ref, x[i - 1], x[i - 2], x[i]), x[i - 1], x[i], to_infinite);
         }
     }
     d.toward.assign(n, 1.0);
@@ -382,16 +386,17 @@ Densities densities(const Reference& ref, const Path& path) {
         const Triangle& t = ref.ds.triangles[L.triangle];
         double area = 0.5 * length(cross(d3(t.p1) - d3(t.p0), d3(t.p2) - d3(t.p0)));
         d.light[n - 1] = L.select_pdf / area;
-        d.light[n - 2] = toward(std::max(0.0, dot(lv.ng, -w_light)) / kPi, lv, x[n - 2], false);
+        d.light[n - 2] = toward(ref, std::max(0.0, dot(lv.ng, -w_light)) / kPi, lv, x[n - 2], false);
         break;
     }
     case LIGHT_POINT:
         d.light[n - 1] = L.select_pdf;  // times the delta position, common to every strategy
-        d.light[n - 2] = toward(1 / (4 * kPi), lv, x[n - 2], false);
+        d.light[n - 2] = toward(ref, 1 / (4 * kPi), lv, x[n - 2], false);
         break;
     case LIGHT_SPOT:
         d.light[n - 1] = L.select_pdf;
-        d.light[n - 2] = toward(dot(-w_light, d3(L.direction)) >= 1 - double(L.one_minus_cos_total)
+        d.light[n - 2] = toward(ref,
+                                dot(-w_light, d3(L.direction)) >= 1 - double(L.one_minus_cos_total)
                                     ? 1 / (2 * kPi * double(L.one_minus_cos_total))
                                     : 0.0,
                                 lv, x[n - 2], false);
@@ -411,7 +416,7 @@ Densities densities(const Reference& ref, const Path& path) {
         if (x[j + 1].specular) {
             d.light[j] = 1;
         } else {
-            d.light[j] = toward(scatter_pdf(ref, x[j + 1], x[j + 2], x[j]), x[j + 1], x[j], false);
+            d.light[j] = toward(ref, scatter_pdf(ref, x[j + 1], x[j + 2], x[j]), x[j + 1], x[j], false);
         }
     }
     for (int j = 0; j + 1 < n; ++j) d.light[j] *= d.away[j + 1];
@@ -692,6 +697,9 @@ struct PathGenerator {
                 D3 h = a + b;
                 if (length(h) < 1e-3) return false;
                 x[i].ng = x[i].ns = round(normalize(h));  // a mirror reflects a into b
+                // Half the glass reflects from inside: its neighbours behind its front face, so
+                // that chains enter it through the back (entry densities over ior^2).
+                if (material == kGlass && u() < 0.5) x[i].ng = x[i].ns = -x[i].ng;
                 continue;
             }
             double spread = material == kGlossySharp ? 0.03 : 0.6;
@@ -872,85 +880,115 @@ void check_integrator(Integrator integrator, bool thin, uint64_t seed, Mix mix =
 
 // ---- The chain convention against the densities it stands for ----------------------------------
 
-// A ray through a glass sphere (refracted in and out, index 1.5 in air) onto the plane
-// dot(p, plane_n) = plane_d: the landing point, and the chain's two sphere points.
-struct SphereChain {
+// A glass sphere (index 1.5, in air) and rays through it onto a plane dot(p, plane_n) = plane_d.
+struct GlassSphere {
     D3 center{0, 0.3, 0};
     double radius = 0.3, eta = 1.5;
 
-    // Far (inside = true) or near intersection of o + t d with the sphere.
+    // The far (inside = true) or near intersection of o + t d with the sphere.
     double hit(D3 o, D3 d, bool inside) const {
         D3 oc = o - center;
         double b = dot(oc, d), c = dot(oc, oc) - radius * radius, disc = b * b - c;
-        if (disc < 0) return -1;
-        return inside ? -b + std::sqrt(disc) : -b - std::sqrt(disc);
+        EXPECT_GE(disc, 0) << "the test's ray misses the sphere";
+        return inside ? -b + std::sqrt(std::max(disc, 0.0)) : -b - std::sqrt(std::max(disc, 0.0));
     }
     static D3 refract(D3 d, D3 n, double eta_ratio) {  // n against d; eta_ratio = eta_i / eta_t
         double cos_i = -dot(n, d), k = 1 - eta_ratio * eta_ratio * (1 - cos_i * cos_i);
         EXPECT_GT(k, 0) << "total internal reflection in the test's chain";
         return normalize(d * eta_ratio + n * (eta_ratio * cos_i - std::sqrt(std::max(k, 0.0))));
     }
-    D3 trace(D3 o, D3 d, D3 plane_n, double plane_d, D3* s1 = nullptr, D3* s2 = nullptr) const {
-        double t = hit(o, d, false);
-        EXPECT_GT(t, 0) << "the test's ray misses the sphere";
-        D3 a = o + d * t;
-        d = refract(d, normalize(a - center), 1 / eta);
-        D3 b = a + d * hit(a, d, true);
-        d = refract(d, -normalize(b - center), eta);
-        if (s1) *s1 = a;
-        if (s2) *s2 = b;
-        return b + d * ((plane_d - dot(b, plane_n)) / dot(d, plane_n));
+    static D3 onto_plane(D3 o, D3 d, D3 plane_n, double plane_d) {
+        return o + d * ((plane_d - dot(o, plane_n)) / dot(d, plane_n));
     }
-    // |dA / dw| of where the chain lands per solid angle around direction d (finite differences).
-    double area_per_solid_angle(D3 o, D3 d, D3 plane_n, double plane_d) const {
-        const double eps = 1e-6;
-        D3 t1 = normalize(cross(d, std::fabs(d.x) < 0.9 ? D3(1, 0, 0) : D3(0, 1, 0))), t2 = cross(d, t1);
-        D3 p0 = trace(o, d, plane_n, plane_d);
-        D3 p1 = trace(o, normalize(d + t1 * eps), plane_n, plane_d);
-        D3 p2 = trace(o, normalize(d + t2 * eps), plane_n, plane_d);
-        return length(cross(p1 - p0, p2 - p0)) / (eps * eps);
+    // From o outside: in and out of the sphere, onto the plane; the sphere points in *in, *out.
+    D3 through(D3 o, D3 d, D3 plane_n, double plane_d, D3* in = nullptr, D3* out = nullptr) const {
+        D3 a = o + d * hit(o, d, false);
+        d = refract(d, normalize(a - center), 1 / eta);
+        if (in) *in = a;
+        return out_of(a, d, plane_n, plane_d, out);
+    }
+    // From o inside: out of the sphere, onto the plane.
+    D3 out_of(D3 o, D3 d, D3 plane_n, double plane_d, D3* out = nullptr) const {
+        D3 b = o + d * hit(o, d, true);
+        if (out) *out = b;
+        return onto_plane(b, refract(d, -normalize(b - center), eta), plane_n, plane_d);
+    }
+    // From o outside: into the sphere, onto a plane inside it.
+    D3 into(D3 o, D3 d, D3 plane_n, double plane_d) const {
+        D3 a = o + d * hit(o, d, false);
+        return onto_plane(a, refract(d, normalize(a - center), 1 / eta), plane_n, plane_d);
     }
 };
 
-// Through a glass sphere resting on a floor (cornell-specular's caustic: a floor point D, a light
-// point y above), the densities each side's sampling gives the other end, computed from the
-// chain's Jacobians, have the ratio that the chain's entry densities give (so the MIS weights
-// are the balance heuristic's), and not the ratio of pbrt-v3's convention.
-TEST(MisBruteForce, ChainEntryDensitiesAreExactThroughGlass) {
-    const SphereChain glass;
-    const D3 floor_n(0, 1, 0), light_n(0, -1, 0);
-    const double light_height = 1.5;
-    HostVertex D;
-    D.p = D3(0.25, 0, 0.05);
-    D.ng = D.ns = floor_n;
-    D3 w_D = normalize(D3(0.05, 0.32, -0.02) - D.p);
-    D3 s1, s2;
-    HostVertex y;
-    y.p = glass.trace(D.p, w_D, floor_n, light_height, &s1, &s2);
-    y.ng = y.ns = light_n;
-    D3 w_y = normalize(s2 - y.p);
-    ASSERT_LT(length(glass.trace(y.p, w_y, floor_n, 0.0) - D.p), 1e-9) << "the reversed chain must return to D";
+// |dA/dw|: the area where a chain lands per solid angle around direction d (finite differences).
+template <class Chain> double area_per_solid_angle(D3 d, Chain chain) {
+    const double eps = 1e-6;
+    D3 t1 = normalize(cross(d, std::fabs(d.x) < 0.9 ? D3(1, 0, 0) : D3(0, 1, 0))), t2 = cross(d, t1);
+    D3 p0 = chain(d), p1 = chain(normalize(d + t1 * eps)), p2 = chain(normalize(d + t2 * eps));
+    return length(cross(p1 - p0, p2 - p0)) / (eps * eps);
+}
 
-    // Generalised geometric term from either end: the same (both ends in air).
-    double cos_D = std::fabs(dot(floor_n, w_D)), cos_y = std::fabs(dot(light_n, w_y));
-    double dA_y_dw_D = glass.area_per_solid_angle(D.p, w_D, floor_n, light_height);
-    double dA_D_dw_y = glass.area_per_solid_angle(y.p, w_y, floor_n, 0.0);
-    EXPECT_LT(rel_diff(cos_D / dA_y_dw_D, cos_y / dA_D_dw_y), 1e-3);
+HostVertex host_vertex(D3 p, D3 ng, bool specular = false) {
+    HostVertex v;
+    v.p = p;
+    v.ng = v.ns = ng;
+    v.specular = specular;
+    return v;
+}
 
-    // Each side's density of the other end: a solid-angle density times the chain's Jacobian.
+// The chain between D and y: each side's density of the other end is its solid-angle density
+// times the chain's Jacobian (by finite differences). The entry densities' ratio must be that
+// ratio (so the MIS weights are the balance heuristic's); pbrt-v3's must not (so the check can
+// fail). dA_y_dw_D: |dA_y / dw_D|, and so on; entry_D, entry_y: the chain's first vertex from
+// either end; eta_D: 1 or the glass's index where D lies inside it.
+void check_chain_densities(const HostVertex& D, D3 w_D, const HostVertex& y, D3 w_y, double dA_y_dw_D,
+                           double dA_D_dw_y, const HostVertex& entry_D, const HostVertex& entry_y, double glass_ior,
+                           double eta_D) {
+    // The generalised geometric term from either end (etendue eta^2 cos dA dw is conserved).
+    double cos_D = std::fabs(dot(D.ng, w_D)), cos_y = std::fabs(dot(y.ng, w_y));
+    EXPECT_LT(rel_diff(eta_D * eta_D * cos_D / dA_y_dw_D, cos_y / dA_D_dw_y), 1e-3);
     const double pdf_w_D = 0.7, pdf_w_y = 0.3;
     double true_ratio = (pdf_w_y / dA_D_dw_y) / (pdf_w_D / dA_y_dw_D);  // p(D | y) / p(y | D)
-    HostVertex first_from_D, first_from_y;  // the chain's entry vertex from either side
-    first_from_D.p = s1;
-    first_from_D.ng = normalize(s1 - glass.center);
-    first_from_D.specular = true;
-    first_from_y.p = s2;
-    first_from_y.ng = normalize(s2 - glass.center);
-    first_from_y.specular = true;
-    double entry_ratio = toward(pdf_w_y, y, first_from_y, false) / toward(pdf_w_D, D, first_from_D, false);
+    double entry_ratio =
+        to_chain_entry(pdf_w_y, y, entry_y, glass_ior) / to_chain_entry(pdf_w_D, D, entry_D, glass_ior);
     EXPECT_LT(rel_diff(entry_ratio, true_ratio), 1e-3);
-    double pbrt_ratio = to_area(pdf_w_y, y, first_from_y, false) / to_area(pdf_w_D, D, first_from_D, false);
+    double pbrt_ratio = to_area(pdf_w_y, y, entry_y, false) / to_area(pdf_w_D, D, entry_D, false);
     EXPECT_GT(std::fabs(std::log(pbrt_ratio / true_ratio)), std::log(2.0)) << "pbrt's ratio " << pbrt_ratio;
+}
+
+// cornell-specular's caustic: a floor point D, a glass sphere resting on the floor, a light
+// point y above; the chain enters and leaves the glass.
+TEST(MisBruteForce, ChainEntryDensitiesAreExactThroughGlass) {
+    const GlassSphere glass;
+    const D3 up(0, 1, 0);
+    const double light_height = 1.5;
+    HostVertex D = host_vertex(D3(0.25, 0, 0.05), up);
+    D3 w_D = normalize(D3(0.05, 0.32, -0.02) - D.p), s1, s2;
+    HostVertex y = host_vertex(glass.through(D.p, w_D, up, light_height, &s1, &s2), -up);
+    D3 w_y = normalize(s2 - y.p);
+    ASSERT_LT(length(glass.through(y.p, w_y, up, 0.0) - D.p), 1e-9) << "the reversed chain must return to D";
+    double dA_y_dw_D = area_per_solid_angle(w_D, [&](D3 d) { return glass.through(D.p, d, up, light_height); });
+    double dA_D_dw_y = area_per_solid_angle(w_y, [&](D3 d) { return glass.through(y.p, d, up, 0.0); });
+    check_chain_densities(D, w_D, y, w_y, dA_y_dw_D, dA_D_dw_y, host_vertex(s1, normalize(s1 - glass.center), true),
+                          host_vertex(s2, normalize(s2 - glass.center), true), glass.eta, 1.0);
+}
+
+// A diffuse point D inside the glass (a body embedded in it) and a light point y outside: one
+// refraction, whose ends lie in indices 1.5 and 1.
+TEST(MisBruteForce, ChainEntryDensitiesAreExactOutOfGlass) {
+    const GlassSphere glass;
+    const D3 up(0, 1, 0), n_D = normalize(D3(0.2, 1, 0.1));
+    const double light_height = 1.5;
+    HostVertex D = host_vertex(glass.center + D3(0.05, -0.1, 0.03), n_D);
+    const double plane_D = dot(D.p, n_D);
+    D3 w_D = normalize(D3(0.3, 1, -0.2)), s;
+    HostVertex y = host_vertex(glass.out_of(D.p, w_D, up, light_height, &s), -up);
+    D3 w_y = normalize(s - y.p);
+    ASSERT_LT(length(glass.into(y.p, w_y, n_D, plane_D) - D.p), 1e-9) << "the reversed chain must return to D";
+    double dA_y_dw_D = area_per_solid_angle(w_D, [&](D3 d) { return glass.out_of(D.p, d, up, light_height); });
+    double dA_D_dw_y = area_per_solid_angle(w_y, [&](D3 d) { return glass.into(y.p, d, n_D, plane_D); });
+    HostVertex entry = host_vertex(s, normalize(s - glass.center), true);
+    check_chain_densities(D, w_D, y, w_y, dA_y_dw_D, dA_D_dw_y, entry, entry, glass.eta, glass.eta);
 }
 
 TEST(MisBruteForce, BdptPinhole) { check_integrator(Integrator::Bdpt, false, 101); }
