@@ -193,13 +193,14 @@ inline float convert_density(const SceneData* scene, const PathVertex* v, float 
  * etendue is conserved), so u's area density through the chain is pdf_w G / (eta_v^2 |cos_v|),
  * and the strategy sampling the chain from u's end has the same G. G cancels in every ratio of
  * the MIS recursion, and the chain's entry vertex takes pdf_w / (eta_v^2 |cos_v|), its
- * projected solid-angle density scaled by eta_v^2 (no cosine off surfaces: camera, point light,
+ * projected solid-angle density over eta_v^2 (no cosine off surfaces: camera, point light,
  * medium). eta_v is the glass's index where the chain enters glass through its back face (v is
  * inside), else 1: a chain that starts inside one glass and enters another is not told apart.
- * The chain's other vertices keep the remap0 convention. pbrt-v3 instead converts pdf_w to area at the chain's
- * first vertex, which swaps G for the first segment's cosine over distance squared on each side:
- * on cornell-specular's floor caustic (light, glass sphere, floor 0.1-0.3 from it, camera) that
- * underweighted light tracing about 30x against the camera path hitting the light. */
+ * The chain's other vertices keep the remap0 convention. pbrt-v3 instead converts pdf_w to area
+ * at the chain's first vertex, which swaps G for the first segment's cosine over distance
+ * squared on each side: on cornell-specular's floor caustic (light, glass sphere, floor 0.1-0.3
+ * from it, camera) that underweighted light tracing about 30x against the camera path hitting
+ * the light. */
 inline float specular_chain_entry_density(const SceneData* scene, const PathVertex* v, float pdf_w,
                                           const PathVertex* next) {
     float3 w = next->p - v->p;
@@ -216,7 +217,8 @@ inline float specular_chain_entry_density(const SceneData* scene, const PathVert
 /* Density of `next` sampled from v by a solid-angle density pdf_w at v: area measure
  * (convert_density), or, where `next` is specular, that of a specular chain's entry vertex. */
 inline float density_toward(const SceneData* scene, const PathVertex* v, float pdf_w, const PathVertex* next) {
-    return next->delta ? specular_chain_entry_density(scene, v, pdf_w, next) : convert_density(scene, v, pdf_w, next);
+    return next->delta ? specular_chain_entry_density(scene, v, pdf_w, next)
+                       : convert_density(scene, v, pdf_w, next);
 }
 
 /* Veach's adjoint correction for shading normals on importance-transport paths
