@@ -46,10 +46,6 @@ struct AdaptivePlan {
     double u_mean = 0;            // the variance of a pixel of tier 0 and 1 meet at 4 u_mean
 };
 
-// The rule above in two steps, for plan_adaptive_samples and for the strategy pilot's prediction
-// of what the plan will do (render/strategy_pilot.h): u_p, the second largest of p's eight
-// neighbours' variances in an image of w x h per-pixel variances v; then the tiers for a render
-// of spp samples per pixel from any per-pixel u.
 // The largest and second largest of the values added (0 while there are fewer): the second
 // is what one outlier cannot raise.
 struct LargestTwo {
@@ -64,6 +60,10 @@ struct LargestTwo {
     }
 };
 
+// The rule above in two steps, for plan_adaptive_samples and for the strategy pilot's prediction
+// of what the plan will do (render/strategy_pilot.h): u_p, the second largest of p's eight
+// neighbours' variances in an image of w x h per-pixel variances v; then the tiers for a render
+// of spp samples per pixel from any per-pixel u.
 struct AdaptiveTiers {
     std::vector<uint8_t> tier;
     uint64_t extra_samples = 0;
