@@ -321,10 +321,8 @@ public:
         nodes_ = upload(bvh.nodes.data(), bvh.nodes.size() * sizeof(BvhNode), huge_pages, &nodes_memory_);
         tris_ = upload(tris.data(), tris.size() * sizeof(Triangle), huge_pages, &tris_memory_);
         const cl::Program& program = ctx.program("kernels/trace.cl", {}).program;
-        // EXPERIMENT: CLBDPT_TRACE_PACKET=1 traces 8 rays per work item (cl/bvh_packet.h).
-        packet_ = std::getenv("CLBDPT_TRACE_PACKET") != nullptr;
-        closest_ = cl::Kernel(program, packet_ ? "trace_closest_packet" : "trace_closest");
-        any_ = cl::Kernel(program, packet_ ? "trace_any_packet" : "trace_any");
+        closest_ = cl::Kernel(program, "trace_closest");
+        any_ = cl::Kernel(program, "trace_any");
         if (count_visits)
             counted_ = cl::Kernel(ctx.program("kernels/trace.cl", {"BVH_COUNT_VISITS"}).program, "trace_closest");
     }
@@ -367,7 +365,6 @@ public:
 
     Timing run() {
         size_t n = rays_->o.size();
-        if (packet_) n = (n + 7) / 8;
         size_t global = local_ > 0 ? (n + local_ - 1) / local_ * local_ : n;
         cl::NDRange local = local_ > 0 ? cl::NDRange(size_t(local_)) : cl::NullRange;
         Stopwatch watch;
@@ -417,7 +414,6 @@ private:
     const RaySet* rays_ = nullptr;
     cl::Buffer nodes_, tris_, ob_, db_, out_;
     cl::Kernel closest_, any_, counted_;
-    bool packet_ = false;
 };
 
 int hit_triangle(const cl_float4& h) {
