@@ -1,9 +1,10 @@
 // Adaptive sampling's plan (render/adaptive.h), without OpenCL: which pixels get extra samples,
-// that a pixel's plan does not depend on its own samples (what keeps its value unbiased), and the
-// cap on the extra samples.
+// that a pixel's plan does not depend on its own samples (what keeps its value unbiased), the
+// cap on the extra samples, and the light image's variance that camera-only ones cannot lower.
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
 
 #include "render/adaptive.h"
 
@@ -28,18 +29,19 @@ Film film_with_variance(int width, int height, int spp, F variance) {
     return film;
 }
 
-// An edge: column 20 of a 40 x 30 film is 1000 times noisier than the rest. The pixels beside it
-// (columns 19 and 21) have two noisy neighbours each, above and below on the edge, and so do the
-// edge's own pixels: those three columns get extra samples (the edge's rows 1 .. 28 at least;
-// its end rows have one noisy neighbour in the column). Uniform noise elsewhere gets none.
+// An edge: column 20 of a 40 x 30 film is 1000 times noisier than the rest. Every pixel within
+// kAdaptiveRadius columns of it has edge pixels in its window (the edge's own pixels those above
+// and below), so those columns get extra samples; uniform noise farther away gets none, and so
+// does a film of uniform noise: spread evenly, extra samples would lower the error only as
+// much as they cost.
 TEST(AdaptivePlan, RefinesEdgesNotUniformNoise) {
     const int w = 40, h = 30;
     const Film film = film_with_variance(w, h, 16, [](int x, int) { return x == 20 ? 1000.0 : 1.0; });
     const AdaptivePlan plan = plan_adaptive_samples(film);
-    for (int y = 1; y < h - 1; ++y)
+    for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) {
             const int tier = plan.tier[size_t(y) * w + x];
-            if (x >= 19 && x <= 21) EXPECT_GT(tier, 0) << x << ", " << y;
+            if (std::abs(x - 20) <= kAdaptiveRadius) EXPECT_GT(tier, 0) << x << ", " << y;
             else EXPECT_EQ(tier, 0) << x << ", " << y;
         }
     uint64_t extra = 0;
@@ -49,6 +51,32 @@ TEST(AdaptivePlan, RefinesEdgesNotUniformNoise) {
     const AdaptivePlan uniform = plan_adaptive_samples(film_with_variance(w, h, 16, [](int, int) { return 3.0; }));
     EXPECT_EQ(uniform.extra_samples, 0u);
     EXPECT_EQ(uniform.pixels_refined, 0u);
+}
+
+// Camera-only extra samples (a bdpt film's) leave its light image's variance as it is, so the
+// plan weighs what they take off the camera image against the whole image's: a light image of
+// strong independent noise (variance 100 per pixel at spp against the camera image's 1000/16
+// on the edge) leaves them nothing worth their time, where path-traced extra samples (whole
+// estimates, which dilute the light image too) still refine the edge.
+TEST(AdaptivePlan, LightImageNoiseHoldsBackCameraOnlyExtras) {
+    const int w = 40, h = 30, spp = 16;
+    Film film = film_with_variance(w, h, spp, [](int x, int) { return x == 20 ? 1000.0 : 1.0; });
+    uint32_t state = 12345;
+    for (double& l : film.light_sum) {
+        state = state * 1664525u + 1013904223u;
+        l = spp * (5.0 + 10.0 * std::sqrt(3.0) * (2.0 * (state >> 8) / double(1 << 24) - 1.0));  // sd 10 at spp
+    }
+    const AdaptivePlan whole = plan_adaptive_samples(film, kAdaptiveMaxTier, kAdaptiveMaxExtraShare, false);
+    const AdaptivePlan camera_only = plan_adaptive_samples(film, kAdaptiveMaxTier, kAdaptiveMaxExtraShare, true);
+    EXPECT_GT(whole.extra_samples, 0u);
+    EXPECT_EQ(camera_only.extra_samples, 0u);
+
+    // A light image of no noise (a smooth ramp) holds nothing back.
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x)
+            for (int c = 0; c < 3; ++c) film.light_sum[(size_t(y) * w + x) * 3 + c] = spp * (1.0 + 0.01 * x);
+    EXPECT_EQ(plan_adaptive_samples(film, kAdaptiveMaxTier, kAdaptiveMaxExtraShare, true).extra_samples,
+              whole.extra_samples);
 }
 
 // Changing one pixel's own samples, however much, changes its neighbours' plans but never its

@@ -144,9 +144,9 @@ TEST(StrategyPilotChoice, CornellSpecularPredictsTheCausticsOfPt) {
 
 // With adaptive sampling the pilot credits each camera image with what the plan will take off
 // it (run_strategy_pilot). On the Cornell box a path tracer's error gathers near the light, and
-// the plan there takes 43% of pt's squared error off with 3% more samples (64 spp, seeds 1 and
-// 2: MSE 5.0e-5 without it, 2.9e-5 with it); the pilot credits a part of that (it left 0.81
-// for 5.8% more samples when this was written). lt has no camera image: nothing to credit.
+// the plan of 2026-11-26 took 43% of pt's squared error off with 3% more samples (64 spp, seeds 1 and
+// 2: MSE 5.0e-5 without it, 2.9e-5 with it); the pilot credits a part of that, for extra
+// samples whose time it counts. lt has no camera image: nothing to credit.
 // The same seed gives the same passes, so only the prediction may differ.
 TEST(StrategyPilotAdaptive, CreditsTheCameraImageNotTheLightImage) {
     Scene loaded = load_scene(scene_path("cornell-box"));
@@ -168,8 +168,8 @@ TEST(StrategyPilotAdaptive, CreditsTheCameraImageNotTheLightImage) {
             saw_pt = true;
             EXPECT_LT(a.adaptive_variance_left, 0.95) << "pt's error near the light";
             EXPECT_GT(a.adaptive_extra_share, 0.0);
-            EXPECT_LT(a.adaptive_extra_share, 0.2);
             EXPECT_LT(a.predicted_mse, p.predicted_mse);
+            EXPECT_GT(a.efficiency, p.efficiency) << "extra samples planned where they pay for their time";
         }
         if (a.integrator == Integrator::Lt) {
             saw_lt = true;

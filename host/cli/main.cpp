@@ -507,7 +507,6 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
     Integrator adaptive_integrator = options.integrator;  // of the extra samples
     if (adaptive && interrupted_by == 0) {
         const auto adaptive_start = Clock::now();
-        adaptive_plan = plan_adaptive_samples(film);
         // The pilot's path tracer takes them where it renders about as well as the chosen mix
         // (render/strategy_pilot.h).
         Renderer* extra_renderer = renderer_list.front();
@@ -515,6 +514,8 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
             for (auto& r : pilot.renderers)
                 if (r && r->options().integrator == Integrator::Pt) extra_renderer = r.get();
         adaptive_integrator = extra_renderer->options().integrator;
+        adaptive_plan = plan_adaptive_samples(film, kAdaptiveMaxTier, kAdaptiveMaxExtraShare,
+                                              adaptive_integrator != Integrator::Pt);
         render_adaptive_samples(*extra_renderer, adaptive_plan, film, &st,
                                 [] { return interrupt_signal() != 0; });
         adaptive_seconds = seconds_since(adaptive_start);

@@ -1,6 +1,8 @@
 #include "render/adaptive.h"
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 
 #include "film/rendered_items.h"
 #include "util/error.h"
@@ -31,59 +33,118 @@ std::vector<double> sample_variances(const Film& film) {
     return v;
 }
 
+// The variance of the film's light image (t = 1 splats), summed over pixels and channels: what
+// camera-only extra samples leave as it is. Estimated from each pixel's difference from the
+// mean of its (up to four) edge neighbours, which for independent noise of variance s^2 has
+// variance s^2 (1 + 1/k); the image's own detail adds to it, so the estimate errs high, towards
+// fewer extra samples.
+double light_image_variance(const Film& film) {
+    const int w = film.width, h = film.height;
+    if (film.spp < 1 || film.light_sum.size() != size_t(w) * h * 3) return 0.0;
+    const double scale = 1.0 / film.spp;
+    double sum = 0;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const int nx[4] = {x - 1, x + 1, x, x}, ny[4] = {y, y, y - 1, y + 1};
+            for (int c = 0; c < 3; ++c) {
+                double neighbours = 0;
+                int k = 0;
+                for (int i = 0; i < 4; ++i) {
+                    if (nx[i] < 0 || ny[i] < 0 || nx[i] >= w || ny[i] >= h) continue;
+                    neighbours += film.light_sum[(size_t(ny[i]) * w + nx[i]) * 3 + c];
+                    ++k;
+                }
+                if (k == 0) continue;
+                const double d = (film.light_sum[(size_t(y) * w + x) * 3 + c] - neighbours / k) * scale;
+                sum += d * d / (1.0 + 1.0 / k);
+            }
+        }
+    return sum;
+}
+
 }  // namespace
 
 std::vector<double> adaptive_neighbour_variances(const std::vector<double>& v, int w, int h) {
     const size_t pixels = size_t(w) * h;
     std::vector<double> u(pixels, 0.0);
+    if (pixels == 0 || v.size() != pixels) return u;
+    // The window's sums by rows, then by columns (sums of a few non-negative terms each, so a
+    // firefly's variance cannot swamp its small neighbours' by cancellation, as a summed-area
+    // table's differences would).
+    const int r = kAdaptiveRadius;
+    std::vector<double> rows(pixels, 0.0);
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) {
-            LargestTwo neighbours;
-            for (int dy = -1; dy <= 1; ++dy)
-                for (int dx = -1; dx <= 1; ++dx) {
-                    const int nx = x + dx, ny = y + dy;
-                    if ((dx == 0 && dy == 0) || nx < 0 || ny < 0 || nx >= w || ny >= h) continue;
-                    neighbours.add(v[size_t(ny) * w + nx]);
-                }
-            u[size_t(y) * w + x] = neighbours.second;
+            double sum = 0;
+            for (int nx = std::max(0, x - r); nx <= std::min(w - 1, x + r); ++nx) sum += v[size_t(y) * w + nx];
+            rows[size_t(y) * w + x] = sum;
         }
+    for (int y = 0; y < h; ++y) {
+        const int y0 = std::max(0, y - r), y1 = std::min(h - 1, y + r);
+        for (int x = 0; x < w; ++x) {
+            const int x0 = std::max(0, x - r), x1 = std::min(w - 1, x + r);
+            double sum = 0;
+            for (int ny = y0; ny <= y1; ++ny) sum += rows[size_t(ny) * w + x];
+            const size_t p = size_t(y) * w + x;
+            const int neighbours = (x1 - x0 + 1) * (y1 - y0 + 1) - 1;
+            // p's own variance taken back out; rounding must not leave a negative remainder.
+            u[p] = neighbours > 0 ? std::max(0.0, sum - v[p]) / neighbours : 0.0;
+        }
+    }
     return u;
 }
 
-AdaptiveTiers adaptive_tiers(const std::vector<double>& u, int max_tier, int spp, double max_extra_share) {
+AdaptiveTiers adaptive_tiers(const std::vector<double>& u, int max_tier, int spp, double max_extra_share,
+                             double fixed_variance) {
     AdaptiveTiers plan;
     const size_t pixels = u.size();
     plan.tier.assign(pixels, 0);
     max_tier = std::clamp(max_tier, 0, 8);
     double u_sum = 0;
     for (double x : u) u_sum += x;
-    if (pixels == 0 || !(u_sum > 0) || max_tier == 0) return plan;
-    plan.u_mean = u_sum / double(pixels);
+    if (pixels == 0 || !(u_sum > 0) || max_tier == 0 || spp <= 0) return plan;
+    const double u_mean = u_sum / double(pixels);
 
-    const double budget = max_extra_share * double(spp) * double(pixels);
-    for (;;) {
-        plan.extra_samples = 0;
-        plan.pixels_refined = 0;
+    // The tiers for threshold base `base`; returns the extra samples and the predicted variance
+    // sum_p u_p / n_p, in units of one sample's.
+    auto tiers_for = [&](double base, std::vector<uint8_t>* tier) {
+        uint64_t extra = 0;
+        double variance = 0;
         for (size_t p = 0; p < pixels; ++p) {
             int k = 0;
-            for (double threshold = 4 * plan.u_mean; k < max_tier && u[p] >= threshold; threshold *= 4) ++k;
-            plan.tier[p] = uint8_t(k);
-            plan.extra_samples += uint64_t(spp) * ((uint64_t(1) << k) - 1);
-            plan.pixels_refined += k > 0;
+            for (double threshold = 4 * base; k < max_tier && u[p] >= threshold; threshold *= 4) ++k;
+            if (tier) (*tier)[p] = uint8_t(k);
+            extra += uint64_t(spp) * ((uint64_t(1) << k) - 1);
+            variance += u[p] / double(uint64_t(spp) << k);
         }
-        if (double(plan.extra_samples) <= budget) break;
-        plan.u_mean *= 2;
+        return std::make_pair(extra, variance);
+    };
+    // Bases from far above every u (no extra samples) down by factors of sqrt 2 while the extra
+    // samples fit the budget; the one of the least predicted variance x samples wins, and one
+    // with more extra samples must beat the best before it by kAdaptiveMinGain.
+    const double budget = max_extra_share * double(spp) * double(pixels);
+    const double samples = double(spp) * double(pixels);
+    const double u_max = *std::max_element(u.begin(), u.end());
+    double best_base = u_max, best_cost = (u_sum / spp + fixed_variance) * samples;  // u_max: none refined
+    for (double base = u_max / 2; base > u_mean * 1e-9; base /= std::sqrt(2.0)) {
+        const auto [extra, variance] = tiers_for(base, nullptr);
+        if (double(extra) > budget) break;
+        const double cost = (variance + fixed_variance) * (samples + double(extra));
+        if (cost * (1 + kAdaptiveMinGain) < best_cost) best_base = base, best_cost = cost;
     }
+    plan.extra_samples = tiers_for(best_base, &plan.tier).first;
+    for (uint8_t k : plan.tier) plan.pixels_refined += k > 0;
+    plan.u_mean = best_base;
     return plan;
 }
 
-AdaptivePlan plan_adaptive_samples(const Film& film, int max_tier, double max_extra_share) {
+AdaptivePlan plan_adaptive_samples(const Film& film, int max_tier, double max_extra_share, bool camera_only_extras) {
     AdaptivePlan plan;
     plan.spp = film.spp;
     plan.max_tier = std::clamp(max_tier, 0, 8);
     AdaptiveTiers tiers =
         adaptive_tiers(adaptive_neighbour_variances(sample_variances(film), film.width, film.height), max_tier,
-                       film.spp, max_extra_share);
+                       film.spp, max_extra_share, camera_only_extras ? light_image_variance(film) : 0.0);
     plan.tier = std::move(tiers.tier);
     plan.extra_samples = tiers.extra_samples;
     plan.pixels_refined = tiers.pixels_refined;

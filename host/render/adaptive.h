@@ -3,18 +3,26 @@
 // path-traced Cornell box's in 1% of its pixels, on the light's outline; 98% of veach-mis's in
 // 0.5%, on the small lights' glossy reflections).
 //
-// Which pixels, and how many samples. The variance of pixel p's samples is estimated from its
-// spp samples (Film::camera_sq), but p's own plan is made from its eight neighbours' variances
-// alone: the second largest of them, u_p, which a lone firefly cannot raise but an edge through
-// p, with neighbours on it on both sides, does. So how many samples p gets does not depend on
-// p's own samples, and its pixel value, their mean, stays unbiased (with the sobol and
-// independent samplers, whose pixels draw independent samples; zsobol shares a sequence
-// between neighbours and gets no extra samples). Minimising the image's squared error for a
-// number of samples gives each pixel samples in proportion to its standard deviation, so p gets
-// spp x 2^k samples in all for the largest k <= max_tier with u_p >= 4^k u_mean, where u_mean
-// is u's mean over the image: a pixel of uniform noise gets none. Powers of two keep a pixel's
-// sample count a whole number of Sobol's strata. If the extra samples would exceed
-// max_extra_share of the render's, u_mean counts twice as high until they do not.
+// Which pixels. The variance of pixel p's samples is estimated from its spp samples
+// (Film::camera_sq), but p's own plan is made from its neighbours' variances alone: u_p, their
+// mean over the (2 kAdaptiveRadius + 1)^2 window around p, p left out. So how many samples p
+// gets does not depend on p's own samples, and its pixel value, their mean, stays unbiased
+// (with the sobol and independent samplers, whose pixels draw independent samples; zsobol
+// shares a sequence between neighbours and gets no extra samples). A window of 80 neighbours
+// rather than the eight next to p: the noise that pays for extra samples is often made of rare
+// large samples (caustics seen through glass, glossy reflections of small lights), which a
+// pixel's 64 samples catch or miss by chance, so a region's variance shows in the mean over
+// many pixels far better than in any one of them.
+//
+// How many samples. Minimising the image's squared error for a number of samples gives each
+// pixel samples in proportion to its standard deviation, so p gets spp x 2^k samples in all
+// for the largest k <= max_tier with u_p >= 4^k base (powers of two keep a pixel's sample count
+// a whole number of Sobol's strata). The base is the one of the least predicted
+// variance x samples, sum_p u_p / n_p x sum_p n_p, among bases a factor sqrt 2 apart from
+// max_p u_p (no extra samples) down, as long as the extra samples stay within max_extra_share
+// of the render's; a base with more extra samples must predict kAdaptiveMinGain less than the
+// best before it. So a film of uniform noise gets none, and one whose noise sits in a few
+// regions gets as many as pay for themselves.
 //
 // The extra samples of pixel p are its samples spp .. n_p - 1, so they continue its Sobol
 // sequence. They add to the camera image only: a bdpt sample's light-image splats (t = 1) are
@@ -37,17 +45,22 @@ namespace clbdpt {
 // Renders of fewer samples per pixel get no extra samples: their variance estimates are too rough.
 constexpr int kAdaptiveMinSpp = 8;
 
+// The radius of the window whose mean variance plans a pixel's samples, and the predicted gain
+// in variance x samples that a plan with more extra samples must bring.
+constexpr int kAdaptiveRadius = 4;
+constexpr double kAdaptiveMinGain = 0.01;
+
 struct AdaptivePlan {
     int spp = 0;                // the render's samples per pixel
     int max_tier = 0;
     std::vector<uint8_t> tier;  // per pixel: spp x 2^tier samples in all
     uint64_t extra_samples = 0;
     uint64_t pixels_refined = 0;  // pixels with tier > 0
-    double u_mean = 0;            // the variance of a pixel of tier 0 and 1 meet at 4 u_mean
+    double u_mean = 0;            // the base: the u of a pixel of tier 0 and 1 meet at 4 u_mean
 };
 
 // The largest and second largest of the values added (0 while there are fewer): the second
-// is what one outlier cannot raise.
+// is what one outlier cannot raise (the strategy pilot's stand-in for a pixel's u).
 struct LargestTwo {
     double first = 0, second = 0;
     void add(double value) {
@@ -61,9 +74,9 @@ struct LargestTwo {
 };
 
 // The rule above in two steps, for plan_adaptive_samples and for the strategy pilot's prediction
-// of what the plan will do (render/strategy_pilot.h): u_p, the second largest of p's eight
-// neighbours' variances in an image of w x h per-pixel variances v; then the tiers for a render
-// of spp samples per pixel from any per-pixel u.
+// of what the plan will do (render/strategy_pilot.h): u_p, the mean of the variances around p
+// in an image of w x h per-pixel variances v (the window clipped at the image's edges); then
+// the tiers for a render of spp samples per pixel from any per-pixel u.
 struct AdaptiveTiers {
     std::vector<uint8_t> tier;
     uint64_t extra_samples = 0;
@@ -71,13 +84,20 @@ struct AdaptiveTiers {
     double u_mean = 0;
 };
 std::vector<double> adaptive_neighbour_variances(const std::vector<double>& v, int w, int h);
-AdaptiveTiers adaptive_tiers(const std::vector<double>& u, int max_tier, int spp, double max_extra_share);
+// fixed_variance: the variance of the image that extra samples leave as it is (a bdpt film's
+// light image under camera-only extra samples), summed over pixels and channels, which the
+// prediction adds to the camera image's sum_p u_p / n_p.
+AdaptiveTiers adaptive_tiers(const std::vector<double>& u, int max_tier, int spp, double max_extra_share,
+                             double fixed_variance = 0.0);
 
-// The plan for a film of spp samples per pixel with camera_sq kept.
+// The plan for a film of spp samples per pixel with camera_sq kept. camera_only_extras: the extra
+// samples will add to the camera image alone (those of the passes' own bdpt or lt renderer), so
+// the film's light image keeps its variance (estimated from its pixels' differences from their
+// neighbours); path-traced extra samples are whole estimates, which dilute it.
 constexpr int kAdaptiveMaxTier = 4;
 constexpr double kAdaptiveMaxExtraShare = 1.0;
 AdaptivePlan plan_adaptive_samples(const Film& film, int max_tier = kAdaptiveMaxTier,
-                                   double max_extra_share = kAdaptiveMaxExtraShare);
+                                   double max_extra_share = kAdaptiveMaxExtraShare, bool camera_only_extras = false);
 
 // Renders the plan's extra samples with `renderer` (whose options give the seed; the passes' own
 // or the path tracer) and adds them to the film's camera sums and extra_samples (setting

@@ -257,17 +257,20 @@ double standard_error_without_largest(std::vector<double> terms, double leave_ou
 
 // What adaptive sampling would do to a candidate's camera image (run_strategy_pilot): the plan's
 // tiers (render/adaptive.h) from the grid's per-pixel `u`, applied to its per-pixel variances of
-// one sample, `terms`, for a render of spp samples per pixel.
+// one sample, `terms`, for a render of spp samples per pixel whose light image has per-pixel
+// variance light_variance per sample (which camera-only extra samples leave as it is).
 struct AdaptiveEffect {
     double variance_left = 1.0;  // share of the terms' sum that the extra samples leave
     double extra_share = 0.0;    // extra samples per sample of the render
 };
-AdaptiveEffect adaptive_effect(const std::vector<double>& terms, const std::vector<double>& u, int spp) {
+AdaptiveEffect adaptive_effect(const std::vector<double>& terms, const std::vector<double>& u, int spp,
+                               double light_variance) {
     AdaptiveEffect e;
     double sum = 0;
     for (double t : terms) sum += t;
     if (!(sum > 0) || spp < kAdaptiveMinSpp || u.size() != terms.size()) return e;
-    const AdaptiveTiers tiers = adaptive_tiers(u, kAdaptiveMaxTier, spp, kAdaptiveMaxExtraShare);
+    const AdaptiveTiers tiers = adaptive_tiers(u, kAdaptiveMaxTier, spp, kAdaptiveMaxExtraShare,
+                                               light_variance * double(terms.size()) / spp);
     double left = 0;
     for (size_t p = 0; p < terms.size(); ++p) left += terms[p] / double(1u << tiers.tier[p]);
     e.variance_left = left / sum;
@@ -493,7 +496,7 @@ StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene
         // With adaptive sampling, what its plan leaves of the camera image's 1/N variance (the
         // terms below), for what extra samples (their time counts).
         if (adaptive && spp > 0) {
-            const AdaptiveEffect a = adaptive_effect(t.one_terms, t.second_pair_terms, spp);
+            const AdaptiveEffect a = adaptive_effect(t.one_terms, t.second_pair_terms, spp, light.mean);
             c.adaptive_variance_left = a.variance_left;
             c.adaptive_extra_share = a.extra_share;
         }
