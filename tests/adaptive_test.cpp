@@ -79,6 +79,26 @@ TEST(AdaptivePlan, LightImageNoiseHoldsBackCameraOnlyExtras) {
               whole.extra_samples);
 }
 
+// Two equally noisy edges, columns 10 and 30, where a sample on the right half traces 16 times
+// the rays of one on the left: samples in proportion to the standard deviation over the root of
+// the cost give the right edge a quarter of the left's, two tiers fewer. Without ray counts the
+// two edges get the same.
+TEST(AdaptivePlan, CostlierPixelsGetFewerSamples) {
+    const int w = 40, h = 30, spp = 16;
+    Film film = film_with_variance(w, h, spp, [](int x, int) { return x == 10 || x == 30 ? 1000.0 : 1.0; });
+    auto tier_at = [&](const AdaptivePlan& plan, int x) { return int(plan.tier[size_t(h / 2) * w + x]); };
+    const AdaptivePlan same_cost = plan_adaptive_samples(film);
+    EXPECT_GT(tier_at(same_cost, 10), 0);
+    EXPECT_EQ(tier_at(same_cost, 10), tier_at(same_cost, 30));
+
+    film.camera_rays.assign(size_t(w) * h, 0.0);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) film.camera_rays[size_t(y) * w + x] = spp * (x < 20 ? 1.0 : 16.0);
+    const AdaptivePlan by_cost = plan_adaptive_samples(film);
+    EXPECT_GT(tier_at(by_cost, 10), 0);
+    EXPECT_EQ(tier_at(by_cost, 10) - tier_at(by_cost, 30), 2);
+}
+
 // Changing one pixel's own samples, however much, changes its neighbours' plans but never its
 // own: its extra samples are decided before and apart from its samples, so their mean stays
 // unbiased. (The image-wide mean u_mean moves with it, by at most 1/pixels of the change; the

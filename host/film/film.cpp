@@ -9,6 +9,10 @@ void Film::add(const Film& other) {
         if (camera_sq.empty()) camera_sq.assign(other.camera_sq.size(), 0.0);
         for (size_t i = 0; i < camera_sq.size(); ++i) camera_sq[i] += other.camera_sq[i];
     }
+    if (!other.camera_rays.empty()) {
+        if (camera_rays.empty()) camera_rays.assign(other.camera_rays.size(), 0.0);
+        for (size_t i = 0; i < camera_rays.size(); ++i) camera_rays[i] += other.camera_rays[i];
+    }
     if (!other.strategy_sum.empty()) {
         if (strategy_sum.empty()) {
             strategy_sum.assign(other.strategy_sum.size(), 0.0);

@@ -26,7 +26,10 @@ struct Film {
     // samples of r^2 + g^2 + b^2 (kept when RenderOptions::track_variance is set), from which
     // the pixel's sample variance follows. extra_samples: per pixel, camera samples beyond spp,
     // added to camera_sum (empty: none); the light image keeps spp samples per pixel.
+    // camera_rays: per pixel, the rays its camera samples traced (kept with camera_sq), what a
+    // sample there costs.
     std::vector<double> camera_sq;
+    std::vector<double> camera_rays;
     std::vector<uint32_t> extra_samples;
     // Whether the extra samples are whole estimates of their pixel (a path tracer's, in a bdpt
     // render): the pixel is then the mean of its spp samples (camera_sum and light_sum) and its

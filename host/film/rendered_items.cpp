@@ -39,6 +39,7 @@ void add_camera_value(Film& film, const RenderedItems& items, int item, int pixe
     dst[2] += c[2];
     if (!film.camera_sq.empty())
         film.camera_sq[size_t(pixel)] += double(c[0]) * c[0] + double(c[1]) * c[1] + double(c[2]) * c[2];
+    if (!film.camera_rays.empty() && !items.rays.empty()) film.camera_rays[size_t(pixel)] += items.rays[size_t(item)];
 }
 
 // Adds the camera values and splats that land on pixels [lo, hi), in item order: each pixel's

@@ -45,6 +45,8 @@ struct RenderedItems {
     int run_pixel = 0, run_length = 0;  // a run of pixels instead of a pass (PassSpec)
     // Per item: rgb. Items in dropped_items (sorted) are not added.
     std::vector<float> camera;
+    // Per item: the rays its sample traced (Film::camera_rays; may be empty).
+    std::vector<float> rays;
     std::vector<int> dropped_items;
     // Light-image splats as the kernel wrote them (none with pixel < 0), in the order they are
     // added.

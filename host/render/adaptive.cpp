@@ -95,7 +95,7 @@ std::vector<double> adaptive_neighbour_variances(const std::vector<double>& v, i
 }
 
 AdaptiveTiers adaptive_tiers(const std::vector<double>& u, int max_tier, int spp, double max_extra_share,
-                             double fixed_variance) {
+                             double fixed_variance, const std::vector<double>& cost) {
     AdaptiveTiers plan;
     const size_t pixels = u.size();
     plan.tier.assign(pixels, 0);
@@ -103,36 +103,53 @@ AdaptiveTiers adaptive_tiers(const std::vector<double>& u, int max_tier, int spp
     double u_sum = 0;
     for (double x : u) u_sum += x;
     if (pixels == 0 || !(u_sum > 0) || max_tier == 0 || spp <= 0) return plan;
-    const double u_mean = u_sum / double(pixels);
 
-    // The tiers for threshold base `base`; returns the extra samples and the predicted variance
-    // sum_p u_p / n_p, in units of one sample's.
-    auto tiers_for = [&](double base, std::vector<uint8_t>* tier) {
+    // Each pixel's cost of a sample relative to the mean (1 where none is known), kept above a
+    // thousandth of it; its tier follows u_p / c_p.
+    std::vector<double> c(pixels, 1.0);
+    double cost_sum = 0;
+    if (cost.size() == pixels)
+        for (double x : cost) cost_sum += x;
+    if (cost_sum > 0) {
+        const double mean = cost_sum / double(pixels);
+        for (size_t p = 0; p < pixels; ++p) c[p] = std::max(cost[p] / mean, 1e-3);
+    }
+    std::vector<double> q(pixels);
+    for (size_t p = 0; p < pixels; ++p) q[p] = u[p] / c[p];
+
+    // The tiers for threshold base `base`: extra samples, predicted variance sum_p u_p / n_p and
+    // time sum_p n_p c_p (in units of one sample's).
+    struct Outcome {
         uint64_t extra = 0;
-        double variance = 0;
+        double variance = 0, time = 0;
+    };
+    auto tiers_for = [&](double base, std::vector<uint8_t>* tier) {
+        Outcome o;
         for (size_t p = 0; p < pixels; ++p) {
             int k = 0;
-            for (double threshold = 4 * base; k < max_tier && u[p] >= threshold; threshold *= 4) ++k;
+            for (double threshold = 4 * base; k < max_tier && q[p] >= threshold; threshold *= 4) ++k;
             if (tier) (*tier)[p] = uint8_t(k);
-            extra += uint64_t(spp) * ((uint64_t(1) << k) - 1);
-            variance += u[p] / double(uint64_t(spp) << k);
+            const double n = double(uint64_t(spp) << k);
+            o.extra += uint64_t(spp) * ((uint64_t(1) << k) - 1);
+            o.variance += u[p] / n;
+            o.time += n * c[p];
         }
-        return std::make_pair(extra, variance);
+        return o;
     };
-    // Bases from far above every u (no extra samples) down by factors of sqrt 2 while the extra
-    // samples fit the budget; the one of the least predicted variance x samples wins, and one
-    // with more extra samples must beat the best before it by kAdaptiveMinGain.
+    // Bases from the largest q (no extra samples) down by factors of sqrt 2 while the extra
+    // samples fit the budget; the one of the least predicted (variance + fixed) x time wins, and
+    // one with more extra samples must beat the best before it by kAdaptiveMinGain.
     const double budget = max_extra_share * double(spp) * double(pixels);
-    const double samples = double(spp) * double(pixels);
-    const double u_max = *std::max_element(u.begin(), u.end());
-    double best_base = u_max, best_cost = (u_sum / spp + fixed_variance) * samples;  // u_max: none refined
-    for (double base = u_max / 2; base > u_mean * 1e-9; base /= std::sqrt(2.0)) {
-        const auto [extra, variance] = tiers_for(base, nullptr);
-        if (double(extra) > budget) break;
-        const double cost = (variance + fixed_variance) * (samples + double(extra));
-        if (cost * (1 + kAdaptiveMinGain) < best_cost) best_base = base, best_cost = cost;
+    const double q_max = *std::max_element(q.begin(), q.end());
+    const Outcome none = tiers_for(q_max, nullptr);
+    double best_base = q_max, best_cost = (none.variance + fixed_variance) * none.time;
+    for (double base = q_max / 2; base > q_max * 1e-12; base /= std::sqrt(2.0)) {
+        const Outcome o = tiers_for(base, nullptr);
+        if (double(o.extra) > budget) break;
+        const double predicted = (o.variance + fixed_variance) * o.time;
+        if (predicted * (1 + kAdaptiveMinGain) < best_cost) best_base = base, best_cost = predicted;
     }
-    plan.extra_samples = tiers_for(best_base, &plan.tier).first;
+    plan.extra_samples = tiers_for(best_base, &plan.tier).extra;
     for (uint8_t k : plan.tier) plan.pixels_refined += k > 0;
     plan.u_mean = best_base;
     return plan;
@@ -142,9 +159,14 @@ AdaptivePlan plan_adaptive_samples(const Film& film, int max_tier, double max_ex
     AdaptivePlan plan;
     plan.spp = film.spp;
     plan.max_tier = std::clamp(max_tier, 0, 8);
+    // A sample's cost around each pixel, p left out as for u (a pixel's own rays follow its own
+    // paths): the rays per sample of its window.
+    std::vector<double> cost;
+    if (film.camera_rays.size() == size_t(film.width) * film.height && film.spp > 0)
+        cost = adaptive_neighbour_variances(film.camera_rays, film.width, film.height);
     AdaptiveTiers tiers =
         adaptive_tiers(adaptive_neighbour_variances(sample_variances(film), film.width, film.height), max_tier,
-                       film.spp, max_extra_share, camera_only_extras ? light_image_variance(film) : 0.0);
+                       film.spp, max_extra_share, camera_only_extras ? light_image_variance(film) : 0.0, cost);
     plan.tier = std::move(tiers.tier);
     plan.extra_samples = tiers.extra_samples;
     plan.pixels_refined = tiers.pixels_refined;

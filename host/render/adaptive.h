@@ -14,15 +14,17 @@
 // pixel's 64 samples catch or miss by chance, so a region's variance shows in the mean over
 // many pixels far better than in any one of them.
 //
-// How many samples. Minimising the image's squared error for a number of samples gives each
-// pixel samples in proportion to its standard deviation, so p gets spp x 2^k samples in all
-// for the largest k <= max_tier with u_p >= 4^k base (powers of two keep a pixel's sample count
-// a whole number of Sobol's strata). The base is the one of the least predicted
-// variance x samples, sum_p u_p / n_p x sum_p n_p, among bases a factor sqrt 2 apart from
-// max_p u_p (no extra samples) down, as long as the extra samples stay within max_extra_share
-// of the render's; a base with more extra samples must predict kAdaptiveMinGain less than the
-// best before it. So a film of uniform noise gets none, and one whose noise sits in a few
-// regions gets as many as pay for themselves.
+// How many samples. Minimising the image's squared error for a given time gives each pixel
+// samples in proportion to its standard deviation over the square root of what a sample there
+// costs (c_p: the rays per sample of p's window, p left out again, relative to the image's
+// mean). So p gets spp x 2^k samples in all for the largest k <= max_tier with
+// u_p / c_p >= 4^k base (powers of two keep a pixel's sample count a whole number of Sobol's
+// strata). The base is the one of the least predicted variance x time,
+// (sum_p u_p / n_p + what the extra samples cannot lower) x sum_p n_p c_p, among bases a
+// factor sqrt 2 apart from the largest u_p / c_p (no extra samples) down, as long as the extra
+// samples stay within max_extra_share of the render's; a base with more extra samples must
+// predict kAdaptiveMinGain less than the best before it. So a film of uniform noise gets none,
+// and one whose noise sits in a few regions gets as many as pay for their time.
 //
 // The extra samples of pixel p are its samples spp .. n_p - 1, so they continue its Sobol
 // sequence. They add to the camera image only: a bdpt sample's light-image splats (t = 1) are
@@ -86,9 +88,10 @@ struct AdaptiveTiers {
 std::vector<double> adaptive_neighbour_variances(const std::vector<double>& v, int w, int h);
 // fixed_variance: the variance of the image that extra samples leave as it is (a bdpt film's
 // light image under camera-only extra samples), summed over pixels and channels, which the
-// prediction adds to the camera image's sum_p u_p / n_p.
+// prediction adds to the camera image's sum_p u_p / n_p. cost: per pixel, what a sample there
+// costs (its neighbourhood's rays per sample; empty: the same everywhere).
 AdaptiveTiers adaptive_tiers(const std::vector<double>& u, int max_tier, int spp, double max_extra_share,
-                             double fixed_variance = 0.0);
+                             double fixed_variance = 0.0, const std::vector<double>& cost = {});
 
 // The plan for a film of spp samples per pixel with camera_sq kept. camera_only_extras: the extra
 // samples will add to the camera image alone (those of the passes' own bdpt or lt renderer), so

@@ -55,6 +55,7 @@ Film render_image(const std::vector<UnitWorker*>& workers, int width, int height
     const int planned = timed ? 0 : options.spp;
     Film film = schedule.resume ? *schedule.resume : Film(width, height);
     if (options.track_variance && film.camera_sq.empty()) film.camera_sq.assign(size_t(width) * height, 0.0);
+    if (options.track_variance && film.camera_rays.empty()) film.camera_rays.assign(size_t(width) * height, 0.0);
     const WorkUnits units(width * height, first_pass);
     const auto start = Clock::now();
     UnitQueue queue(units, &film, options.spp - first_pass, options.time_budget, start, int(workers.size()));

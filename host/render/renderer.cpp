@@ -264,8 +264,8 @@ void Renderer::drop_sample(RenderedItems& out, const LaunchSlot& slot, int item,
     if (out.counts.first_dropped.size() < ItemCounts::kFirstDropped) out.counts.first_dropped.push_back(d);
 }
 
-void Renderer::collect_range(CollectedRange& range, float* camera_dst, const LaunchSlot& slot, int begin,
-                             int end) const {
+void Renderer::collect_range(CollectedRange& range, float* camera_dst, float* rays_dst, const LaunchSlot& slot,
+                             int begin, int end) const {
     // One pass over the outputs, pointers stepping along: on a GPU this loop is what the
     // device waits for.
     const cl_float4* camera = slot.camera_host.data() + begin;
@@ -294,6 +294,7 @@ void Renderer::collect_range(CollectedRange& range, float* camera_dst, const Lau
         dst[1] = c[1];
         dst[2] = c[2];
         rays += uint32_t(c[3]);  // a whole number of rays, far below 2^24
+        if (rays_dst) rays_dst[i] = c[3];
     }
     range.rays = rays;
 }
@@ -303,6 +304,7 @@ void Renderer::collect(RenderedItems& out, const PassSpec& pass, const LaunchSlo
     // Item i of this launch is item first_item - out.first_item + i of `out`.
     const int offset = first_item - out.first_item;
     float* camera_dst = &out.camera[size_t(offset) * 3];
+    float* rays_dst = out.rays.empty() ? nullptr : &out.rays[size_t(offset)];
     // Ranges of the launch's items are collected by threads of their own where there are
     // several (a GPU's launches; a CPU device's cores are busy rendering), each into its own
     // splat list; the lists are joined in item order, so the result does not depend on it.
@@ -311,7 +313,7 @@ void Renderer::collect(RenderedItems& out, const PassSpec& pass, const LaunchSlo
     std::vector<CollectedRange> ranges(static_cast<size_t>(threads));
     if (threads == 1) {
         ranges[0].splats.swap(out.splats);  // appended to in place
-        collect_range(ranges[0], camera_dst, slot, 0, item_count);
+        collect_range(ranges[0], camera_dst, rays_dst, slot, 0, item_count);
         ranges[0].splats.swap(out.splats);
     } else {
         std::vector<std::thread> workers;
@@ -319,7 +321,7 @@ void Renderer::collect(RenderedItems& out, const PassSpec& pass, const LaunchSlo
             const int begin = int(int64_t(item_count) * t / threads), end = int(int64_t(item_count) * (t + 1) / threads);
             if (splat_slots_ > 0) ranges[size_t(t)].splats.reserve(size_t(end - begin) * std::min(splat_slots_, 4));
             workers.emplace_back(
-                [&, t, begin, end] { collect_range(ranges[size_t(t)], camera_dst, slot, begin, end); });
+                [&, t, begin, end] { collect_range(ranges[size_t(t)], camera_dst, rays_dst, slot, begin, end); });
         }
         for (std::thread& w : workers) w.join();
         for (const CollectedRange& r : ranges) out.splats.insert(out.splats.end(), r.splats.begin(), r.splats.end());
@@ -381,6 +383,7 @@ RenderedItems Renderer::render_items(const PassSpec& pass, int first_item, int i
     out.run_pixel = pass.run_pixel;
     out.run_length = pass.run_length;
     out.camera.assign(size_t(item_count) * 3, 0.0f);
+    out.rays.assign(size_t(item_count), 0.0f);
     // Light subpaths leave a few splats each (measured: 2-4 at max depth 5 on the bundled
     // scenes); reserving them saves most of the vector's regrowth.
     if (splat_slots_ > 0) out.splats.reserve(size_t(item_count) * std::min(splat_slots_, 4));

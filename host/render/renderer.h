@@ -57,8 +57,8 @@ struct RenderOptions {
     // Benchmarks only: this renderer waits (factor - 1) times each launch's duration after it,
     // as a device `factor` times slower would take, leaving its cores to the others (> 1: on).
     double debug_slowdown = 1;
-    // Keep each pixel's sum of squared sample values (Film::camera_sq), which adaptive
-    // sampling plans from (render/adaptive.h).
+    // Keep each pixel's sum of squared sample values and its rays (Film::camera_sq,
+    // camera_rays), which adaptive sampling plans from (render/adaptive.h).
     bool track_variance = false;
     // Called now and then from the rendering thread: passes done, passes planned (0 if
     // time-bound), seconds so far.
@@ -203,7 +203,8 @@ private:
                  int item_count) const;
     // Items [begin, end) of a launch: camera values to camera_dst (indexed by launch item), the
     // rest to `range`.
-    void collect_range(CollectedRange& range, float* camera_dst, const LaunchSlot& slot, int begin, int end) const;
+    void collect_range(CollectedRange& range, float* camera_dst, float* rays_dst, const LaunchSlot& slot, int begin,
+                       int end) const;
     // Counts a sample with a non-finite value and leaves it out, or throws (drop_non_finite off).
     void drop_sample(RenderedItems& out, const LaunchSlot& slot, int item, int pixel, uint32_t sample_index) const;
 
