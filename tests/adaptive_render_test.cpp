@@ -9,7 +9,9 @@
 // outline pixel nearly the same in every render and hide it.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <memory>
 #include <string>
 
 #include "render/adaptive.h"
@@ -162,6 +164,45 @@ TEST(AdaptiveSampling, BdptWithPathTracedExtraSamplesStaysUnbiased) {
     }
     expect_same_means("bdpt + pt extra samples, lower half", summarise(adaptive_half), summarise(uniform_half));
     expect_same_means("bdpt + pt extra samples, image", summarise(adaptive_image), summarise(uniform_image));
+}
+
+// Extra samples of scattered pixels go out as one launch over a list of them
+// (PassSpec::run_pixels): each listed pixel's samples must come out bit for bit as when the pixel
+// is rendered as a run of its own, and land on that pixel of the film.
+TEST(AdaptiveSampling, ListedPixelsRenderAsTheirOwnRuns) {
+    const int size = 16, samples = 3;
+    const DeviceScene scene = build_device_scene(load_scene(scene_path("cornell-box")), size, size);
+    Renderer renderer(test_device(), scene, make_options(Integrator::Pt, 5, 5, SamplerKind::Sobol));
+    auto list = std::make_shared<std::vector<int>>(std::vector<int>{3, 77, 150, 151, 255});
+    PassSpec listed;
+    listed.sample_index = listed.position_sample_index = 16;
+    listed.seed = listed.position_seed = 5;
+    listed.run_length = int(list->size());
+    listed.run_pixels = list;
+    const int length = int(list->size());
+    const RenderedItems all = renderer.render_items(listed, 0, samples * length);
+    Film film(size, size);
+    add_to_film(film, all);
+    for (int j = 0; j < length; ++j) {
+        PassSpec own = listed;
+        own.run_pixels = nullptr;
+        own.run_pixel = (*list)[size_t(j)];
+        own.run_length = 1;
+        const RenderedItems one = renderer.render_items(own, 0, samples);
+        double sum[3] = {0, 0, 0};
+        for (int k = 0; k < samples; ++k)
+            for (int c = 0; c < 3; ++c) {
+                EXPECT_EQ(all.camera[size_t(k * length + j) * 3 + c], one.camera[size_t(k) * 3 + c])
+                    << "pixel " << own.run_pixel << ", sample " << k;
+                sum[c] += one.camera[size_t(k) * 3 + c];
+            }
+        for (int c = 0; c < 3; ++c) EXPECT_EQ(film.camera_sum[size_t(own.run_pixel) * 3 + c], sum[c]);
+    }
+    double elsewhere = 0;
+    for (int p = 0; p < size * size; ++p)
+        if (std::find(list->begin(), list->end(), p) == list->end())
+            elsewhere += film.camera_sum[size_t(p) * 3] + film.camera_sum[size_t(p) * 3 + 1] + film.camera_sum[size_t(p) * 3 + 2];
+    EXPECT_EQ(elsewhere, 0.0);
 }
 
 }  // namespace

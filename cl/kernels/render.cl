@@ -42,7 +42,7 @@
 #define STRATEGY_SLOTS ((MAX_DEPTH + 2) * STRATEGY_STRIDE)
 
 __kernel void render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, __global float4* camera_out,
-                          __global SplatRecord* splats
+                          __global SplatRecord* splats, __global const int* run_pixels
 #ifdef STRATEGY_IMAGES
                           , __global SplatRecord* strategy_records
 #endif
@@ -53,8 +53,9 @@ __kernel void render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, __global float
     SceneData scene = SCENE_DATA_FROM_KERNEL_ARGS(&rays_traced);
 
     int item = params.first_pixel + gid;
-    int pixel = launch_item_pixel(item, params.width, params.height, params.pixel_stride, params.run_pixel,
-                                  params.run_length);
+    int pixel = params.run_listed ? run_pixels[params.run_pixel + item % params.run_length]
+                                  : launch_item_pixel(item, params.width, params.height, params.pixel_stride,
+                                                      params.run_pixel, params.run_length);
     /* A run's items go through its pixels once per sample. */
     uint run_sample = params.run_length > 0 ? (uint)(item / params.run_length) : 0u;
     uint sample_index = params.sample_index + run_sample;

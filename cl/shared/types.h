@@ -230,6 +230,10 @@ typedef struct {
     /* Whether bdpt uses strategy (1,1) (cl/strategies.h): with a thin lens or media. (The
      * maximum depth is the kernel's MAX_DEPTH, not a parameter.) */
     clbdpt_int light_to_lens;
+    /* run_listed = 1: the run's pixels are run_pixels[run_pixel + j], j < run_length (the
+     * kernel's pixel list argument), scattered over the film, instead of consecutive. */
+    clbdpt_int run_listed;
+    clbdpt_int pad0, pad1, pad2;
 } RenderParams;
 
 /* Work items of a pass with pixel_stride `stride` over a width x height film. */

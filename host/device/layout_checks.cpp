@@ -120,7 +120,7 @@ CLBDPT_CHECK_FIELD(SceneInfo, node_count, 36);
 CLBDPT_CHECK_FIELD(SceneInfo, camera_medium, 40);
 CLBDPT_CHECK_FIELD(SceneInfo, area_light_count, 44);
 
-CLBDPT_CHECK_STRUCT(RenderParams, 64, 4);
+CLBDPT_CHECK_STRUCT(RenderParams, 80, 4);
 CLBDPT_CHECK_FIELD(RenderParams, width, 0);
 CLBDPT_CHECK_FIELD(RenderParams, height, 4);
 CLBDPT_CHECK_FIELD(RenderParams, first_pixel, 8);
@@ -137,6 +137,7 @@ CLBDPT_CHECK_FIELD(RenderParams, zsobol_base4_digits, 48);
 CLBDPT_CHECK_FIELD(RenderParams, run_pixel, 52);
 CLBDPT_CHECK_FIELD(RenderParams, run_length, 56);
 CLBDPT_CHECK_FIELD(RenderParams, light_to_lens, 60);
+CLBDPT_CHECK_FIELD(RenderParams, run_listed, 64);
 
 CLBDPT_CHECK_STRUCT(SplatRecord, 16, 4);
 CLBDPT_CHECK_FIELD(SplatRecord, r, 0);

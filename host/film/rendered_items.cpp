@@ -15,9 +15,10 @@ struct PixelSegment {
 
 // The items as segments of consecutive pixels: a whole pass or a part of one is a single
 // segment; a run of pixels (PassSpec::run_length) one segment per time it goes through them.
-// Empty for a sparse pass (pixel_stride > 1), whose items' pixels are scattered.
+// Empty for a sparse pass (pixel_stride > 1) or listed pixels, whose items' pixels are scattered.
 std::vector<PixelSegment> pixel_segments(const RenderedItems& items) {
     std::vector<PixelSegment> segments;
+    if (items.run_pixels) return segments;
     if (items.run_length > 0) {
         for (int i = 0; i < items.item_count;) {
             const int in_run = (items.first_item + i) % items.run_length;
@@ -80,8 +81,8 @@ void add_to_film(Film& film, const RenderedItems& items, int threads) {
                 continue;
             }
             add_camera_value(film, items, i,
-                             launch_item_pixel(items.first_item + i, film.width, film.height, items.pixel_stride,
-                                               items.run_pixel, items.run_length));
+                             run_item_pixel(items.first_item + i, film.width, film.height, items.pixel_stride,
+                                            items.run_pixel, items.run_length, items.run_pixels.get()));
         }
         add_pixel_band(film, items, {}, 0, pixels);
     } else if (threads <= 1) {

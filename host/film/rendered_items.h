@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "film/film.h"
@@ -43,6 +44,7 @@ struct RenderedItems {
     int item_count = 0;
     int pixel_stride = 1;
     int run_pixel = 0, run_length = 0;  // a run of pixels instead of a pass (PassSpec)
+    std::shared_ptr<const std::vector<int>> run_pixels;  // the run's pixels, where listed (PassSpec)
     // Per item: rgb. Items in dropped_items (sorted) are not added.
     std::vector<float> camera;
     // Per item: the rays its sample traced (Film::camera_rays; may be empty).
@@ -66,6 +68,14 @@ struct RenderedItems {
 // pass at once would (items in order; each item's splats in slot order). Does not change spp.
 // threads > 1: that many threads add bands of pixels, each pixel's values still in that order,
 // so the film is the same bit for bit.
+// The pixel of item `item` of a launch (launch_item_pixel), or with a pixel list that of the
+// run's listed pixels.
+inline int run_item_pixel(int item, int width, int height, int stride, int run_pixel, int run_length,
+                          const std::vector<int>* run_pixels) {
+    return run_pixels && run_length > 0 ? (*run_pixels)[size_t(run_pixel + item % run_length)]
+                                        : launch_item_pixel(item, width, height, stride, run_pixel, run_length);
+}
+
 void add_to_film(Film& film, const RenderedItems& items, int threads = 1);
 
 }  // namespace clbdpt

@@ -1,6 +1,7 @@
 #include "render/adaptive.h"
 
 #include <algorithm>
+#include <memory>
 #include <cmath>
 #include <limits>
 
@@ -183,36 +184,35 @@ void render_adaptive_samples(Renderer& renderer, const AdaptivePlan& plan, Film&
     film.extra_samples.assign(pixels, 0);
     film.extra_samples_whole = renderer.options().integrator == Integrator::Pt;
     const uint32_t seed = renderer.options().seed;
-    // Tier k's pixels get samples spp 2^(k-1) .. spp 2^k - 1: rendered for every pixel of tier
-    // k or more, a run of neighbouring such pixels at a time, in pixel order (so the image does
-    // not depend on the launch sizes).
+    // Tier k's pixels get samples spp 2^(k-1) .. spp 2^k - 1: rendered for the list of every
+    // pixel of tier k or more, in pixel order, a sample of each at a time (item i: the list's
+    // pixel i % length at sample i / length on), so that each pixel's samples are added in
+    // sample order whatever the launches (the image does not depend on them). One list per
+    // tier: the refined pixels lie scattered (sky's highlights made 565 runs of neighbours, and
+    // as many launches of about a thousand samples each cost an extra sample twice a pass's).
     for (int k = 1; k <= plan.max_tier; ++k) {
+        auto list = std::make_shared<std::vector<int>>();
+        for (size_t p = 0; p < pixels; ++p)
+            if (plan.tier[p] >= k) list->push_back(int(p));
+        if (list->empty()) continue;
+        const int length = int(list->size());
         const uint32_t first_sample = uint32_t(plan.spp) << (k - 1);
         const int64_t samples = int64_t(plan.spp) << (k - 1);
-        for (size_t p = 0; p < pixels;) {
-            if (plan.tier[p] < k) {
-                ++p;
-                continue;
-            }
-            size_t end = p;
-            while (end < pixels && plan.tier[end] >= k) ++end;
-            const int run_length = int(end - p);
-            const int64_t chunk = std::max<int64_t>(1, kMaxItemsPerCall / run_length);
-            for (int64_t done = 0; done < samples; done += chunk) {
-                if (stop && stop()) return;
-                const int64_t count = std::min(chunk, samples - done);
-                PassSpec pass;
-                pass.sample_index = pass.position_sample_index = first_sample + uint32_t(done);
-                pass.seed = pass.position_seed = seed;
-                pass.run_pixel = int(p);
-                pass.run_length = run_length;
-                RenderedItems items = renderer.render_items(pass, 0, int(count * run_length));
-                items.splats.clear();  // the light image keeps spp samples per pixel
-                add_to_film(film, items);
-                for (int i = 0; i < run_length; ++i) film.extra_samples[p + size_t(i)] += uint32_t(count);
-                if (stats) stats->add_counts(items.counts);
-            }
-            p = end;
+        const int64_t chunk = std::max<int64_t>(1, kMaxItemsPerCall / length);
+        for (int64_t done = 0; done < samples; done += chunk) {
+            if (stop && stop()) return;
+            const int64_t count = std::min(chunk, samples - done);
+            PassSpec pass;
+            pass.sample_index = pass.position_sample_index = first_sample + uint32_t(done);
+            pass.seed = pass.position_seed = seed;
+            pass.run_pixel = 0;
+            pass.run_length = length;
+            pass.run_pixels = list;
+            RenderedItems items = renderer.render_items(pass, 0, int(count * length));
+            items.splats.clear();  // the light image keeps spp samples per pixel
+            add_to_film(film, items);
+            for (int p : *list) film.extra_samples[size_t(p)] += uint32_t(count);
+            if (stats) stats->add_counts(items.counts);
         }
     }
 }

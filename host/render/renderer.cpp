@@ -36,7 +36,7 @@ constexpr int kMinLaunchGroups = 64;
 constexpr int kMaxCollectThreads = 8;
 constexpr int kMinItemsPerCollectThread = 16384;
 
-// render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, camera_out, splats)
+// render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, camera_out, splats, run_pixels[, strategy_out])
 constexpr cl_uint kParamsArg = SceneBuffers::kSceneArgCount;
 
 }  // namespace
@@ -111,7 +111,9 @@ Renderer::Renderer(DeviceContext& device, const DeviceScene& scene, const Render
         scene_buffers_->set_args(kernel_);
         kernel_.setArg(kParamsArg + 1, slots_[0].camera_out);
         kernel_.setArg(kParamsArg + 2, slots_[0].splats);
-        if (strategy_slots_ > 0) kernel_.setArg(kParamsArg + 3, slots_[0].strategy_out);
+        run_pixels_ = cl::Buffer(ctx, CL_MEM_READ_ONLY, sizeof(cl_int));  // no list yet: never read
+        kernel_.setArg(kParamsArg + 3, run_pixels_);
+        if (strategy_slots_ > 0) kernel_.setArg(kParamsArg + 4, slots_[0].strategy_out);
         if (local_size_ > 0) {
             // PoCL compiles the work-group function of a kernel at its first launch: do that
             // now, with an empty launch, so it counts as build time and not as render time.
@@ -162,6 +164,7 @@ RenderParams Renderer::batch_params(const PassSpec& pass, int first_item, int it
     params.pixel_stride = pass.pixel_stride;
     params.run_pixel = pass.run_pixel;
     params.run_length = pass.run_length;
+    params.run_listed = pass.run_pixels ? 1 : 0;
     params.position_sample_index = pass.position_sample_index;
     params.position_seed = pass.position_seed;
     params.zsobol_log2_spp = zsobol_log2_spp_;
@@ -186,7 +189,8 @@ void Renderer::enqueue_launch(LaunchSlot& slot, const RenderParams& params, int 
         kernel_.setArg(kParamsArg, params);
         kernel_.setArg(kParamsArg + 1, slot.camera_out);
         kernel_.setArg(kParamsArg + 2, slot.splats);
-        if (strategy_slots_ > 0) kernel_.setArg(kParamsArg + 3, slot.strategy_out);
+        kernel_.setArg(kParamsArg + 3, run_pixels_);
+        if (strategy_slots_ > 0) kernel_.setArg(kParamsArg + 4, slot.strategy_out);
         slot.enqueued = std::chrono::steady_clock::now();
         if (local_size_ > 0) {
             const size_t local = size_t(local_size_);
@@ -330,8 +334,8 @@ void Renderer::collect(RenderedItems& out, const PassSpec& pass, const LaunchSlo
         out.counts.rays += r.rays;
         for (int i : r.dropped) {
             const int run_item = first_item + i;
-            const int pixel = launch_item_pixel(run_item, scene_.camera.width, scene_.camera.height,
-                                                pass.pixel_stride, pass.run_pixel, pass.run_length);
+            const int pixel = run_item_pixel(run_item, scene_.camera.width, scene_.camera.height, pass.pixel_stride,
+                                             pass.run_pixel, pass.run_length, pass.run_pixels.get());
             // A run's items go through its pixels once per sample (PassSpec::run_length).
             const uint32_t run_sample = pass.run_length > 0 ? uint32_t(run_item / pass.run_length) : 0u;
             drop_sample(out, slot, i, pixel, pass.sample_index + run_sample);
@@ -382,6 +386,19 @@ RenderedItems Renderer::render_items(const PassSpec& pass, int first_item, int i
     out.pixel_stride = pass.pixel_stride;
     out.run_pixel = pass.run_pixel;
     out.run_length = pass.run_length;
+    out.run_pixels = pass.run_pixels;
+    if (pass.run_pixels && pass.run_pixels != run_pixels_list_) {
+        // The list travels once per render_items call that brings a new one.
+        try {
+            const std::vector<int>& list = *pass.run_pixels;
+            run_pixels_ = cl::Buffer(device_.context(), CL_MEM_READ_ONLY, sizeof(cl_int) * std::max<size_t>(1, list.size()));
+            if (!list.empty())
+                device_.queue().enqueueWriteBuffer(run_pixels_, CL_TRUE, 0, sizeof(cl_int) * list.size(), list.data());
+        } catch (const cl::Error& e) {
+            throw rendering_failure(e);
+        }
+        run_pixels_list_ = pass.run_pixels;
+    }
     out.camera.assign(size_t(item_count) * 3, 0.0f);
     out.rays.assign(size_t(item_count), 0.0f);
     // Light subpaths leave a few splats each (measured: 2-4 at max depth 5 on the bundled

@@ -130,6 +130,10 @@ struct PassSpec {
     // position sample) index + i / run_length (adaptive sampling, render/adaptive.h).
     int run_pixel = 0;
     int run_length = 0;
+    // Set: the run's pixels are (*run_pixels)[run_pixel + j], j < run_length, instead of
+    // run_pixel + j (adaptive sampling's refined pixels, scattered over the film: one launch
+    // for all of them rather than one per stretch of neighbours).
+    std::shared_ptr<const std::vector<int>> run_pixels;
 };
 
 // Whether bdpt uses the (1,1) strategy, a light point joined straight to the lens, in `scene`:
@@ -183,6 +187,9 @@ private:
     };
 
     RenderParams batch_params(const PassSpec& pass, int first_item, int item_count) const;
+    // The kernel's pixel list (PassSpec::run_pixels) and the list it holds.
+    cl::Buffer run_pixels_;
+    std::shared_ptr<const std::vector<int>> run_pixels_list_;
     // The error a failed OpenCL call while rendering is reported as.
     Error rendering_failure(const cl::Error& e) const;
     // Enqueues one launch of the render kernel over a batch's items and the read-back of its
