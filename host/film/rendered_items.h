@@ -64,10 +64,6 @@ struct RenderedItems {
     ItemCounts counts;
 };
 
-// Adds the items' values to the film's sums, in the order a single device rendering the whole
-// pass at once would (items in order; each item's splats in slot order). Does not change spp.
-// threads > 1: that many threads add bands of pixels, each pixel's values still in that order,
-// so the film is the same bit for bit.
 // The pixel of item `item` of a launch (launch_item_pixel), or with a pixel list that of the
 // run's listed pixels.
 inline int run_item_pixel(int item, int width, int height, int stride, int run_pixel, int run_length,
@@ -76,6 +72,10 @@ inline int run_item_pixel(int item, int width, int height, int stride, int run_p
                                         : launch_item_pixel(item, width, height, stride, run_pixel, run_length);
 }
 
+// Adds the items' values to the film's sums, in the order a single device rendering the whole
+// pass at once would (items in order; each item's splats in slot order). Does not change spp.
+// threads > 1: that many threads add bands of pixels, each pixel's values still in that order,
+// so the film is the same bit for bit.
 void add_to_film(Film& film, const RenderedItems& items, int threads = 1);
 
 }  // namespace clbdpt

@@ -1,9 +1,8 @@
 #include "render/adaptive.h"
 
 #include <algorithm>
-#include <memory>
 #include <cmath>
-#include <limits>
+#include <memory>
 
 #include "film/rendered_items.h"
 #include "util/error.h"
@@ -65,7 +64,7 @@ double light_image_variance(const Film& film) {
 
 }  // namespace
 
-std::vector<double> adaptive_neighbour_variances(const std::vector<double>& v, int w, int h) {
+std::vector<double> adaptive_window_means(const std::vector<double>& v, int w, int h) {
     const size_t pixels = size_t(w) * h;
     std::vector<double> u(pixels, 0.0);
     if (pixels == 0 || v.size() != pixels) return u;
@@ -164,9 +163,9 @@ AdaptivePlan plan_adaptive_samples(const Film& film, int max_tier, double max_ex
     // paths): the rays per sample of its window.
     std::vector<double> cost;
     if (film.camera_rays.size() == size_t(film.width) * film.height && film.spp > 0)
-        cost = adaptive_neighbour_variances(film.camera_rays, film.width, film.height);
+        cost = adaptive_window_means(film.camera_rays, film.width, film.height);
     AdaptiveTiers tiers =
-        adaptive_tiers(adaptive_neighbour_variances(sample_variances(film), film.width, film.height), max_tier,
+        adaptive_tiers(adaptive_window_means(sample_variances(film), film.width, film.height), max_tier,
                        film.spp, max_extra_share, camera_only_extras ? light_image_variance(film) : 0.0, cost);
     plan.tier = std::move(tiers.tier);
     plan.extra_samples = tiers.extra_samples;
@@ -188,8 +187,8 @@ void render_adaptive_samples(Renderer& renderer, const AdaptivePlan& plan, Film&
     // pixel of tier k or more, in pixel order, a sample of each at a time (item i: the list's
     // pixel i % length at sample i / length on), so that each pixel's samples are added in
     // sample order whatever the launches (the image does not depend on them). One list per
-    // tier: the refined pixels lie scattered (sky's highlights made 565 runs of neighbours, and
-    // as many launches of about a thousand samples each cost an extra sample twice a pass's).
+    // tier rather than a launch per stretch of neighbouring refined pixels: they lie scattered
+    // (565 stretches on sky, launches of about a thousand samples that a GPU could not fill).
     for (int k = 1; k <= plan.max_tier; ++k) {
         auto list = std::make_shared<std::vector<int>>();
         for (size_t p = 0; p < pixels; ++p)

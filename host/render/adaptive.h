@@ -76,16 +76,17 @@ struct LargestTwo {
 };
 
 // The rule above in two steps, for plan_adaptive_samples and for the strategy pilot's prediction
-// of what the plan will do (render/strategy_pilot.h): u_p, the mean of the variances around p
-// in an image of w x h per-pixel variances v (the window clipped at the image's edges); then
-// the tiers for a render of spp samples per pixel from any per-pixel u.
+// of what the plan will do (render/strategy_pilot.h): the mean of v over the window around each
+// pixel of a w x h image, the pixel left out and the window clipped at the image's edges (u_p
+// from per-pixel variances, c_p from per-pixel rays); then the tiers for a render of spp
+// samples per pixel from any per-pixel u.
 struct AdaptiveTiers {
     std::vector<uint8_t> tier;
     uint64_t extra_samples = 0;
     uint64_t pixels_refined = 0;
     double u_mean = 0;
 };
-std::vector<double> adaptive_neighbour_variances(const std::vector<double>& v, int w, int h);
+std::vector<double> adaptive_window_means(const std::vector<double>& v, int w, int h);
 // fixed_variance: the variance of the image that extra samples leave as it is (a bdpt film's
 // light image under camera-only extra samples), summed over pixels and channels, which the
 // prediction adds to the camera image's sum_p u_p / n_p. cost: per pixel, what a sample there
