@@ -99,6 +99,41 @@ TEST(AdaptivePlan, CostlierPixelsGetFewerSamples) {
     EXPECT_EQ(tier_at(by_cost, 10) - tier_at(by_cost, 30), 2);
 }
 
+// An outline whose pixels' samples spread widely (variance 1000) but whose two halves of
+// samples have the same mean, as Sobol's strata make them, is a mean already pinned down: with
+// the halves kept (Film::camera_late) the plan leaves it alone; without them it refines it. A
+// second edge whose halves differ as independent samples' would (difference of variance
+// 1000 (1/8 + 1/8) per channel sum) is refined either way.
+TEST(AdaptivePlan, StratifiedOutlinesAreNotRefinedForTheirSpread) {
+    const int w = 40, h = 30, spp = 16;
+    Film film = film_with_variance(w, h, spp, [](int x, int) { return x == 10 || x == 30 ? 1000.0 : 1.0; });
+    auto tier_at = [&](const AdaptivePlan& plan, int x) { return int(plan.tier[size_t(h / 2) * w + x]); };
+    const AdaptivePlan spread_only = plan_adaptive_samples(film);
+    EXPECT_GT(tier_at(spread_only, 10), 0);
+    EXPECT_GT(tier_at(spread_only, 30), 0);
+
+    film.late_from = spp / 2;
+    film.camera_late.assign(size_t(w) * h * 3, 0.0);
+    uint32_t state = 777;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const size_t p = size_t(y) * w + x;
+            // Halves' means m + e and m - e (the whole mean m stays), e drawn so that e^2 has
+            // the mean independent samples' halves would give: var (1/n1 + 1/n2) / 4 with the
+            // pixel's variance; none on the stratified edge, column 10.
+            const double variance = x == 30 ? 1000.0 : x == 10 ? 0.0 : 1.0;
+            state = state * 1664525u + 1013904223u;
+            const double sign = (state >> 31) ? 1.0 : -1.0;
+            const double e = sign * 0.5 * std::sqrt(variance * (2.0 / (spp / 2)));
+            const double m = film.camera_sum[p * 3] / spp;
+            film.camera_late[p * 3] = (spp / 2) * (m - e);
+            film.camera_sum[p * 3] = (spp / 2) * (m + e) + film.camera_late[p * 3];
+        }
+    const AdaptivePlan with_halves = plan_adaptive_samples(film);
+    EXPECT_EQ(tier_at(with_halves, 10), 0) << "a stratified outline";
+    EXPECT_GT(tier_at(with_halves, 30), 0) << "an outline of independent noise";
+}
+
 // Changing one pixel's own samples, however much, changes its neighbours' plans but never its
 // own: its extra samples are decided before and apart from its samples, so their mean stays
 // unbiased. (The image-wide mean u_mean moves with it, by at most 1/pixels of the change; the

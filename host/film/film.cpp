@@ -9,6 +9,11 @@ void Film::add(const Film& other) {
         if (camera_sq.empty()) camera_sq.assign(other.camera_sq.size(), 0.0);
         for (size_t i = 0; i < camera_sq.size(); ++i) camera_sq[i] += other.camera_sq[i];
     }
+    if (!other.camera_late.empty()) {
+        if (camera_late.empty()) camera_late.assign(other.camera_late.size(), 0.0);
+        for (size_t i = 0; i < camera_late.size(); ++i) camera_late[i] += other.camera_late[i];
+        late_from = other.late_from;
+    }
     if (!other.camera_rays.empty()) {
         if (camera_rays.empty()) camera_rays.assign(other.camera_rays.size(), 0.0);
         for (size_t i = 0; i < camera_rays.size(); ++i) camera_rays[i] += other.camera_rays[i];

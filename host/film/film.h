@@ -28,8 +28,13 @@ struct Film {
     // added to camera_sum (empty: none); the light image keeps spp samples per pixel.
     // camera_rays: per pixel, the rays its camera samples traced (kept with camera_sq), what a
     // sample there costs.
+    // camera_late: rgb per pixel, the camera samples of passes late_from and after (kept with
+    // camera_sq where the passes are counted beforehand, late_from = half of them), so that
+    // adaptive sampling can compare the two halves of a pixel's samples.
     std::vector<double> camera_sq;
     std::vector<double> camera_rays;
+    std::vector<double> camera_late;
+    uint32_t late_from = 0;
     std::vector<uint32_t> extra_samples;
     // Whether the extra samples are whole estimates of their pixel (a path tracer's, in a bdpt
     // render): the pixel is then the mean of its spp samples (camera_sum and light_sum) and its

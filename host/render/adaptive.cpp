@@ -33,6 +33,30 @@ std::vector<double> sample_variances(const Film& film) {
     return v;
 }
 
+// Per pixel, a sample's variance as the two halves of its samples tell it: the squared
+// difference of the means of its samples before and from Film::late_from, times
+// n1 n2 / (n1 + n2), which for independent samples has the sample variance as its mean (summed
+// over r, g and b). Sobol's strata make each half's mean, and the whole mean, better than
+// independent samples would; this estimate shrinks with them, where the samples' own spread
+// does not (an outline's pixel: samples on and off a bright light, a mean that the strata pin
+// down). Empty where the film did not keep the later samples.
+std::vector<double> pixel_half_variances(const Film& film) {
+    const size_t pixels = size_t(film.width) * film.height;
+    if (film.camera_late.size() != pixels * 3 || film.late_from == 0 || film.late_from >= uint32_t(film.spp)) return {};
+    const double n1 = film.late_from, n2 = double(film.spp) - n1;
+    std::vector<double> v(pixels, 0.0);
+    for (size_t p = 0; p < pixels; ++p) {
+        double d2 = 0;
+        for (int c = 0; c < 3; ++c) {
+            const double late = film.camera_late[p * 3 + c];
+            const double d = (film.camera_sum[p * 3 + c] - late) / n1 - late / n2;
+            d2 += d * d;
+        }
+        v[p] = d2 * n1 * n2 / (n1 + n2);
+    }
+    return v;
+}
+
 // The variance of the film's light image (t = 1 splats), summed over pixels and channels: what
 // camera-only extra samples leave as it is. Estimated from each pixel's difference from the
 // mean of its (up to four) edge neighbours, which for independent noise of variance s^2 has
@@ -164,9 +188,17 @@ AdaptivePlan plan_adaptive_samples(const Film& film, int max_tier, double max_ex
     std::vector<double> cost;
     if (film.camera_rays.size() == size_t(film.width) * film.height && film.spp > 0)
         cost = adaptive_window_means(film.camera_rays, film.width, film.height);
-    AdaptiveTiers tiers =
-        adaptive_tiers(adaptive_window_means(sample_variances(film), film.width, film.height), max_tier,
-                       film.spp, max_extra_share, camera_only_extras ? light_image_variance(film) : 0.0, cost);
+    // u_p: the window's mean of its pixels' sample variances, but no more than its mean of their
+    // halves' variances (pixel_half_variances), where the strata make the mean of the samples
+    // better than their spread says.
+    std::vector<double> u = adaptive_window_means(sample_variances(film), film.width, film.height);
+    const std::vector<double> halves = pixel_half_variances(film);
+    if (!halves.empty()) {
+        const std::vector<double> from_halves = adaptive_window_means(halves, film.width, film.height);
+        for (size_t p = 0; p < u.size(); ++p) u[p] = std::min(u[p], from_halves[p]);
+    }
+    AdaptiveTiers tiers = adaptive_tiers(u, max_tier, film.spp, max_extra_share,
+                                         camera_only_extras ? light_image_variance(film) : 0.0, cost);
     plan.tier = std::move(tiers.tier);
     plan.extra_samples = tiers.extra_samples;
     plan.pixels_refined = tiers.pixels_refined;

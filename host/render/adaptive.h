@@ -12,7 +12,10 @@
 // rather than the eight next to p: the noise that pays for extra samples is often made of rare
 // large samples (caustics seen through glass, glossy reflections of small lights), which a
 // pixel's 64 samples catch or miss by chance, so a region's variance shows in the mean over
-// many pixels far better than in any one of them.
+// many pixels far better than in any one of them. And no more than the window's mean of the
+// variance its pixels' two halves of samples show (the difference of the means of samples
+// before and after half the passes): on an outline, samples on and off a bright light spread
+// widely, but Sobol's strata pin down their mean, and the halves agree.
 //
 // How many samples. Minimising the image's squared error for a given time gives each pixel
 // samples in proportion to its standard deviation over the square root of what a sample there

@@ -56,6 +56,10 @@ Film render_image(const std::vector<UnitWorker*>& workers, int width, int height
     Film film = schedule.resume ? *schedule.resume : Film(width, height);
     if (options.track_variance && film.camera_sq.empty()) film.camera_sq.assign(size_t(width) * height, 0.0);
     if (options.track_variance && film.camera_rays.empty()) film.camera_rays.assign(size_t(width) * height, 0.0);
+    if (options.track_variance && planned >= 2 && film.camera_late.empty()) {
+        film.camera_late.assign(size_t(width) * height * 3, 0.0);
+        film.late_from = uint32_t(planned / 2);
+    }
     const WorkUnits units(width * height, first_pass);
     const auto start = Clock::now();
     UnitQueue queue(units, &film, options.spp - first_pass, options.time_budget, start, int(workers.size()));
