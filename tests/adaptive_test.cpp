@@ -79,14 +79,25 @@ TEST(AdaptivePlan, LightImageNoiseHoldsBackCameraOnlyExtras) {
               whole.extra_samples);
 }
 
+// A 40 x 30 film of 16 spp with two equally noisy edges, columns 10 and 30 (variance 1000, 1
+// elsewhere), and the tier a plan gives column x of its middle row.
+constexpr int kEdgesWidth = 40, kEdgesHeight = 30, kEdgesSpp = 16;
+Film two_edges_film() {
+    return film_with_variance(kEdgesWidth, kEdgesHeight, kEdgesSpp,
+                              [](int x, int) { return x == 10 || x == 30 ? 1000.0 : 1.0; });
+}
+int middle_row_tier(const AdaptivePlan& plan, int x) {
+    return plan.tier[size_t(kEdgesHeight / 2) * kEdgesWidth + x];
+}
+
 // Two equally noisy edges, columns 10 and 30, where a sample on the right half traces 16 times
 // the rays of one on the left: samples in proportion to the standard deviation over the root of
 // the cost give the right edge a quarter of the left's, two tiers fewer. Without ray counts the
 // two edges get the same.
 TEST(AdaptivePlan, CostlierPixelsGetFewerSamples) {
-    const int w = 40, h = 30, spp = 16;
-    Film film = film_with_variance(w, h, spp, [](int x, int) { return x == 10 || x == 30 ? 1000.0 : 1.0; });
-    auto tier_at = [&](const AdaptivePlan& plan, int x) { return int(plan.tier[size_t(h / 2) * w + x]); };
+    const int w = kEdgesWidth, h = kEdgesHeight, spp = kEdgesSpp;
+    Film film = two_edges_film();
+    auto tier_at = middle_row_tier;
     const AdaptivePlan same_cost = plan_adaptive_samples(film);
     EXPECT_GT(tier_at(same_cost, 10), 0);
     EXPECT_EQ(tier_at(same_cost, 10), tier_at(same_cost, 30));
@@ -105,9 +116,9 @@ TEST(AdaptivePlan, CostlierPixelsGetFewerSamples) {
 // second edge whose halves differ as independent samples' would (difference of variance
 // 1000 (1/8 + 1/8) per channel sum) is refined either way.
 TEST(AdaptivePlan, StratifiedOutlinesAreNotRefinedForTheirSpread) {
-    const int w = 40, h = 30, spp = 16;
-    Film film = film_with_variance(w, h, spp, [](int x, int) { return x == 10 || x == 30 ? 1000.0 : 1.0; });
-    auto tier_at = [&](const AdaptivePlan& plan, int x) { return int(plan.tier[size_t(h / 2) * w + x]); };
+    const int w = kEdgesWidth, h = kEdgesHeight, spp = kEdgesSpp;
+    Film film = two_edges_film();
+    auto tier_at = middle_row_tier;
     const AdaptivePlan spread_only = plan_adaptive_samples(film);
     EXPECT_GT(tier_at(spread_only, 10), 0);
     EXPECT_GT(tier_at(spread_only, 30), 0);

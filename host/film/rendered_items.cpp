@@ -41,9 +41,11 @@ void add_camera_value(Film& film, const RenderedItems& items, int item, int pixe
     if (!film.camera_sq.empty())
         film.camera_sq[size_t(pixel)] += double(c[0]) * c[0] + double(c[1]) * c[1] + double(c[2]) * c[2];
     if (!film.camera_rays.empty() && !items.rays.empty()) film.camera_rays[size_t(pixel)] += items.rays[size_t(item)];
+    if (film.camera_late.empty()) return;
+    // The item's sample: a run's items go through its pixels once per sample.
     const uint32_t sample =
         items.sample_index + (items.run_length > 0 ? uint32_t((items.first_item + item) / items.run_length) : 0u);
-    if (!film.camera_late.empty() && sample >= film.late_from) {
+    if (sample >= film.late_from) {
         double* late = &film.camera_late[size_t(pixel) * 3];
         late[0] += c[0];
         late[1] += c[1];

@@ -236,7 +236,6 @@ void render_adaptive_samples(Renderer& renderer, const AdaptivePlan& plan, Film&
             PassSpec pass;
             pass.sample_index = pass.position_sample_index = first_sample + uint32_t(done);
             pass.seed = pass.position_seed = seed;
-            pass.run_pixel = 0;
             pass.run_length = length;
             pass.run_pixels = list;
             RenderedItems items = renderer.render_items(pass, 0, int(count * length));
