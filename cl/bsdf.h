@@ -127,7 +127,12 @@ inline float fresnel_dielectric(float cos_i, float eta_outside, float eta_inside
 inline float3 bsdf_f(const Bsdf* b, float3 wo_world, float3 wi_world) {
     if (bsdf_is_specular(b)) return (float3)(0.0f);
     float3 wo = to_local(&b->frame, wo_world), wi = to_local(&b->frame, wi_world);
+#ifdef HAS_SHADING_NORMALS
     if (wo.z * wi.z <= 0.0f || dot(wi_world, b->ng) * dot(wo_world, b->ng) <= 0.0f) return (float3)(0.0f);
+#else
+    /* The shading frame's normal is ng itself: the geometric side test is this one, bit for bit. */
+    if (wo.z * wi.z <= 0.0f) return (float3)(0.0f);
+#endif
     float3 f = b->kd * INV_PI_F;
 #ifdef HAS_GLOSSY
     if (b->kind == MATERIAL_GLOSSY) f += glossy_f_local(b, wo, wi);

@@ -30,10 +30,8 @@ inline int light_is_infinite(int kind) { return kind == LIGHT_ENVIRONMENT || kin
 
 /* ---- Area lights ----------------------------------------------------------------------- */
 
-inline float3 triangle_normal(__global const Triangle* tri) {
-    float3 p0 = xyz(tri->p0), p1 = xyz(tri->p1), p2 = xyz(tri->p2);
-    return normalize(cross(p1 - p0, p2 - p0));
-}
+/* The unit geometric normal, front face counter-clockwise (stored in the corners' w lanes). */
+inline float3 triangle_normal(__global const Triangle* tri) { return (float3)(tri->p0.w, tri->p1.w, tri->p2.w); }
 
 /* The point of barycentrics b (of p1 and p2) as p0 + b1 (p1 - p0) + b2 (p2 - p0): an affine
  * combination whatever the rounding of b, so its only error off the plane is the rounding of

@@ -5,6 +5,8 @@
 //    horizon is a cell of its own, so the pdf's normalisation is tested too);
 //  - mirror and glass: the reflection law, Snell's law, the Fresnel lobe probabilities and the
 //    lobe weights (with the (eta_i/eta_t)^2 radiance scaling on refraction only in radiance mode).
+#include <cstring>
+
 #include <gtest/gtest.h>
 
 #include <functional>
@@ -17,7 +19,10 @@ namespace {
 constexpr int kRadiance = 0;   // TRANSPORT_RADIANCE
 constexpr int kImportance = 1; // TRANSPORT_IMPORTANCE
 
-const std::vector<std::string> kDefines = {"HAS_GLOSSY", "HAS_MIRROR", "HAS_GLASS"};
+// The tests give shading normals apart from geometric ones, so the kernels are built as for a
+// scene with shading normals (without them, bsdf_f leaves out the geometric side test, which is
+// then the same test: FlatShadingDropsOnlyARepeatedTest).
+const std::vector<std::string> kDefines = {"HAS_GLOSSY", "HAS_MIRROR", "HAS_GLASS", "HAS_SHADING_NORMALS"};
 
 // ---- Reference formulas in double (the README's material model, pbrt-v3 microfacet.cpp) ----
 
@@ -130,11 +135,12 @@ std::vector<Sample> sample_bsdf(const Material& m, D3 n, D3 wo, int mode, size_t
 }
 
 // bsdf_eval_test over n direction pairs: per pair (bsdf_pdf, bsdf_f) as (pdf, f.x, f.y, f.z).
-std::vector<cl_float4> eval_bsdf(const Material& m, D3 ns, D3 ng, const cl::Buffer& wo, const cl::Buffer& wi, size_t n) {
+std::vector<cl_float4> eval_bsdf(const Material& m, D3 ns, D3 ng, const cl::Buffer& wo, const cl::Buffer& wi, size_t n,
+                                 const std::vector<std::string>& defines = kDefines) {
     std::vector<Material> materials = {m};
     cl::Buffer mat = upload(materials);
     cl::Buffer out = output_buffer<cl_float4>(n);
-    cl::Kernel k = test_kernel("kernels/bsdf_test.cl", kDefines, "bsdf_eval_test");
+    cl::Kernel k = test_kernel("kernels/bsdf_test.cl", defines, "bsdf_eval_test");
     k.setArg(0, mat);
     k.setArg(1, cl_int(0));
     k.setArg(2, f4(ns));
@@ -385,6 +391,35 @@ TEST(Bsdf, EvaluationMatchesReference) {
             ASSERT_LE(rel_diff(r[i].s[1], f.x, 1e-6), reference_tolerance(lobe.material)) << lobe.name << " pair " << i;
             ASSERT_LE(rel_diff(r[i].s[3], f.z, 1e-6), reference_tolerance(lobe.material)) << lobe.name << " pair " << i;
         }
+    }
+}
+
+// A scene without shading normals builds bsdf_f without the geometric side test: the shading
+// normal is then the geometric one, and the test repeats the shading side's bit for bit. So both
+// builds give the same pdf and f, to the bit, at every pair of directions with ns = ng (pairs
+// across the plane included, where both are 0).
+TEST(Bsdf, FlatShadingDropsOnlyARepeatedTest) {
+    std::mt19937_64 rng(23);
+    std::uniform_real_distribution<double> uni(0, 1);
+    const size_t n = 4096;
+    std::vector<cl_float4> wo(n), wi(n);
+    for (size_t i = 0; i < n; ++i) {
+        wo[i] = f4(as_float(normalize(spherical(2 * uni(rng) - 1, 2 * kPi * uni(rng)))));
+        wi[i] = f4(as_float(normalize(spherical(2 * uni(rng) - 1, 2 * kPi * uni(rng)))));
+    }
+    cl::Buffer wo_buf = upload(wo), wi_buf = upload(wi);
+    const std::vector<std::string> flat(kDefines.begin(), kDefines.end() - 1);
+    ASSERT_EQ(kDefines.back(), "HAS_SHADING_NORMALS");
+    for (const Lobe& lobe : non_delta_lobes()) {
+        const std::vector<cl_float4> a = eval_bsdf(lobe.material, kNormal, kNormal, wo_buf, wi_buf, n);
+        const std::vector<cl_float4> b = eval_bsdf(lobe.material, kNormal, kNormal, wo_buf, wi_buf, n, flat);
+        size_t nonzero = 0;
+        for (size_t i = 0; i < n; ++i) {
+            ASSERT_EQ(std::memcmp(&a[i], &b[i], sizeof a[i]), 0) << lobe.name << " pair " << i;
+            nonzero += a[i].s[1] != 0.0f;
+        }
+        EXPECT_GT(nonzero, n / 4) << lobe.name;
+        EXPECT_LT(nonzero, n * 3 / 4) << lobe.name;
     }
 }
 

@@ -48,6 +48,30 @@ const TestScene& box() {
     return scene;
 }
 
+// ---- triangle normals ----------------------------------------------------------------------------
+
+// Every hit and area-light sample reads its triangle's normal from the corners' w lanes
+// (cl/shared/types.h): the unit normal of the counter-clockwise winding, rounded once from
+// double, on every triangle of the BVH (spatial-split copies included).
+TEST(Geometry, TrianglesCarryTheirUnitNormal) {
+    ASSERT_FALSE(box().ds.triangles.empty());
+    for (const Triangle& t : box().ds.triangles) {
+        const D3 expected = normalize(cross(d3(t.p1) - d3(t.p0), d3(t.p2) - d3(t.p0)));
+        EXPECT_NEAR(t.p0.s[3], expected.x, 1e-7);
+        EXPECT_NEAR(t.p1.s[3], expected.y, 1e-7);
+        EXPECT_NEAR(t.p2.s[3], expected.z, 1e-7);
+    }
+    // A sliver far from the origin: its normal is still of unit length.
+    Scene s = box_scene();
+    add_triangle(s, {1000, 3, 7}, {1000.001, 3, 7}, {1000, 3.0000001, 7.5}, 0);
+    TestScene sliver(s, 8, 8);
+    for (const Triangle& t : sliver.ds.triangles) {
+        const double len = std::sqrt(double(t.p0.s[3]) * t.p0.s[3] + double(t.p1.s[3]) * t.p1.s[3] +
+                                     double(t.p2.s[3]) * t.p2.s[3]);
+        EXPECT_NEAR(len, 1.0, 2e-7);
+    }
+}
+
 // ---- convert_density ---------------------------------------------------------------------------
 
 // ~6 float operations on values of order 1: 1e-5 of pdf / d^2 (the cosine is a float dot product

@@ -35,7 +35,10 @@ typedef struct {
  * tree needs more. */
 #define BVH_STACK_SIZE 64
 
-/* Triangle corners in BVH order; w is unused (kept 0). */
+/* Triangle corners in BVH order. The w lanes hold the unit geometric normal, normalize((p1 - p0)
+ * x (p2 - p0)) computed in double on the host (p0.w, p1.w, p2.w = x, y, z; host/render/
+ * device_scene.cpp): every hit and every area-light sample needs it, and the lanes are loaded
+ * with the corners anyway. Traversal reads xyz only. */
 typedef struct {
     clbdpt_float4 p0, p1, p2;
 } Triangle;

@@ -13,6 +13,24 @@ namespace clbdpt {
 
 Vec3 vec3_of(const cl_float4& v) { return {v.s[0], v.s[1], v.s[2]}; }
 
+void store_triangle_normals(std::vector<Triangle>& triangles) {
+    for (Triangle& t : triangles) {
+        double e1[3], e2[3];
+        for (int k = 0; k < 3; ++k) {
+            e1[k] = double(t.p1.s[k]) - double(t.p0.s[k]);
+            e2[k] = double(t.p2.s[k]) - double(t.p0.s[k]);
+        }
+        double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+        const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        // The loader drops triangles of zero area; one whose float corners still coincide gets
+        // no normal (0), which no cosine or offset can turn into a NaN.
+        const double inv = len > 0 ? 1.0 / len : 0.0;
+        t.p0.s[3] = float(n[0] * inv);
+        t.p1.s[3] = float(n[1] * inv);
+        t.p2.s[3] = float(n[2] * inv);
+    }
+}
+
 namespace {
 
 constexpr float kPi = 3.14159265358979323846f;
@@ -144,6 +162,7 @@ DeviceScene build_device_scene(const Scene& scene, int width, int height) {
     ds.bvh_spatial_splits = bvh.spatial_splits;
     ds.nodes = std::move(bvh.nodes);
     ds.triangles = reorder(scene.triangles, bvh.order);
+    store_triangle_normals(ds.triangles);
     ds.infos = reorder(scene.infos, bvh.order);
     ds.normals = scene.normals;
     if (!scene.uvs.empty()) ds.uvs = reorder(scene.uvs, bvh.order);

@@ -46,6 +46,9 @@ Camera make_camera(const CameraDesc& desc, int width, int height);
 // The x, y, z of a device float4 (a triangle corner, a material's colour).
 Vec3 vec3_of(const cl_float4& v);
 
+// Writes each triangle's unit geometric normal into its corners' w lanes (cl/shared/types.h).
+void store_triangle_normals(std::vector<Triangle>& triangles);
+
 // Sampling distribution of a lat-long map (layout in cl/lights.h).
 std::vector<float> environment_distribution(const EnvironmentMap& map);
 
