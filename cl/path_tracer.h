@@ -66,18 +66,19 @@ inline float3 path_tracer_emitter_hit(const SceneData* scene, const PathVertex* 
  * same path found by sampling v's BSDF toward the light point; p_0 / p_1 = its area density
  * over the light's origin density; weight 1 for a delta light). */
 inline float3 path_tracer_light_sample(const SceneData* scene, int light, float select_pdf, float2 u,
-                                       const PathVertex* prev, const PathVertex* v) {
+                                       const PathVertex* prev, const PathVertex* v, const Bsdf* b) {
     LightSample ls;
     if (light < 0 || !light_sample_li(scene, light, v->p, u, &ls)) return (float3)(0.0f);
     PathVertex sampled = vertex_at(VERTEX_LIGHT, ls.p, ls.n, ls.p_error);
     sampled.beta = ls.li / (ls.pdf_w * select_pdf);
     sampled.light = light;
     sampled.pdf_fwd = vertex_pdf_light_origin(scene, &sampled, v);
-    float3 L = v->beta * vertex_f(scene, v, &sampled, TRANSPORT_RADIANCE) * sampled.beta;
+    float3 wi;
+    float3 L = v->beta * surface_vertex_f(v, b, &sampled, TRANSPORT_RADIANCE, &wi) * sampled.beta;
     if (vertex_on_surface(v)) L *= fabs(dot(ls.wi, v->ns));
     if (is_black(L) || !vertices_visible(scene, v, &sampled)) return (float3)(0.0f);
     if (vertex_is_delta_light(scene, &sampled)) return L;
-    float pdf_bsdf = vertex_pdf(scene, v, prev, &sampled);
+    float pdf_bsdf = surface_vertex_pdf(scene, v, b, prev, &sampled, wi);
     float ratio = mis_ratio(pdf_bsdf, 0, sampled.pdf_fwd, 0);
 #ifdef NEE_OWN_SELECTION
     ratio /= light_sample_selection_ratio(scene, light, v->p); /* sampled.pdf_fwd has select_pdf */
@@ -88,18 +89,18 @@ inline float3 path_tracer_light_sample(const SceneData* scene, int light, float 
 /* The s = 1 strategy samples at the path's vertex v (draws u_light, u): one light sample, or
  * with NEE_EVERY_LIGHT one of each light group (cl/lights.h), each added on its own. */
 inline void path_tracer_light_samples(const SceneData* scene, float u_light, float2 u, const PathVertex* prev,
-                                      const PathVertex* v, int t, PathTracerSum* sum) {
+                                      const PathVertex* v, const Bsdf* b, int t, PathTracerSum* sum) {
     if (!vertex_is_connectible(scene, v) || scene->info->light_count == 0) return;
     float select_pdf;
 #ifdef NEE_EVERY_LIGHT
     int groups = nee_group_count(scene);
     for (int g = 0; g < groups; ++g) {
         int light = nee_group_light(scene, g, v->p, u_light, &select_pdf);
-        path_tracer_add(sum, path_tracer_light_sample(scene, light, select_pdf, u, prev, v), 1, t);
+        path_tracer_add(sum, path_tracer_light_sample(scene, light, select_pdf, u, prev, v, b), 1, t);
     }
 #else
     int light = sample_light_for_point(scene, v->p, u_light, &select_pdf);
-    path_tracer_add(sum, path_tracer_light_sample(scene, light, select_pdf, u, prev, v), 1, t);
+    path_tracer_add(sum, path_tracer_light_sample(scene, light, select_pdf, u, prev, v, b), 1, t);
 #endif
 }
 
@@ -112,6 +113,9 @@ inline void path_tracer_sample(const SceneData* scene, Rng* rng, float2 raster, 
     if (pdf_fwd == 0.0f) return;
     PathVertex prev = vertex_at(VERTEX_CAMERA, o, (float3)(0.0f), 0.0f);
     prev.beta = (float3)(1.0f);
+    /* The BSDF of each surface vertex, made once: its light samples, its bounce and the next
+     * vertex's forward density all read it (from prev_bsdf at the next vertex). */
+    Bsdf prev_bsdf;
     float3 beta = prev.beta;
     /* Vertex i of the camera subpath (the camera is vertex 0), so its strategies have t = i + 1
      * camera vertices; the last, i = MAX_DEPTH + 1, can only be an emitter hit (s = 0). */
@@ -134,7 +138,7 @@ inline void path_tracer_sample(const SceneData* scene, Rng* rng, float2 raster, 
         }
         v.beta = beta;
         /* The forward density from the positions, as random_walk (cl/walk.h says why). */
-        if (i > 1 && !prev.delta) pdf_fwd = vertex_scatter_pdf(scene, &prev, prev.wo, normalize(v.p - prev.p));
+        if (i > 1 && !prev.delta) pdf_fwd = bsdf_pdf(&prev_bsdf, prev.wo, normalize(v.p - prev.p));
         v.pdf_fwd = convert_density(scene, &prev, pdf_fwd, &v);
 
         int t = i + 1;
@@ -145,9 +149,9 @@ inline void path_tracer_sample(const SceneData* scene, Rng* rng, float2 raster, 
         uint light_draw = sample_draw_light_connection(t), bounce_draw = sample_draw_camera_bounce(i - 1);
         float4 ux, uy;
         rng_draws4(rng, (uint4)(light_draw, light_draw + 1u, bounce_draw, bounce_draw + 1u), &ux, &uy);
-        path_tracer_light_samples(scene, ux.s0, (float2)(ux.s1, uy.s1), &prev, &v, t, sum);
-
         Bsdf b = vertex_bsdf(scene, &v);
+        path_tracer_light_samples(scene, ux.s0, (float2)(ux.s1, uy.s1), &prev, &v, &b, t, sum);
+
         BsdfSample bs;
         if (!bsdf_sample(&b, v.wo, (float3)(ux.s2, ux.s3, uy.s3), TRANSPORT_RADIANCE, &bs) || is_black(bs.f)) break;
         pdf_fwd = bs.pdf;
@@ -160,6 +164,7 @@ inline void path_tracer_sample(const SceneData* scene, Rng* rng, float2 raster, 
         o = offset_ray_origin(v.p, v.ng, v.p_error, bs.wi);
         d = bs.wi;
         prev = v;
+        prev_bsdf = b;
     }
 }
 

@@ -253,6 +253,27 @@ inline float3 vertex_f(const SceneData* scene, const PathVertex* v, const PathVe
     return (float3)(0.0f);
 }
 
+/* vertex_f of surface vertex v whose BSDF b is at hand; *wi gets the unit direction toward
+ * `next` (0 with the result where next is at v's point), for surface_vertex_pdf. */
+inline float3 surface_vertex_f(const PathVertex* v, const Bsdf* b, const PathVertex* next, int mode, float3* wi) {
+    *wi = next->p - v->p;
+    float d2 = length_squared(*wi);
+    if (d2 == 0.0f) return (float3)(0.0f);
+    *wi *= rsqrt(d2);
+    return bsdf_f(b, v->wo, *wi) * correct_shading_normal(v, v->wo, *wi, mode);
+}
+
+/* vertex_pdf of surface vertex v whose BSDF b is at hand, toward `next` along wn (from
+ * surface_vertex_f): the same operations, without making the BSDF again. */
+inline float surface_vertex_pdf(const SceneData* scene, const PathVertex* v, const Bsdf* b, const PathVertex* prev,
+                                const PathVertex* next, float3 wn) {
+    float3 wp = prev->p - v->p;
+    float dp2 = length_squared(wp);
+    if (dp2 == 0.0f) return 0.0f;
+    wp *= rsqrt(dp2);
+    return density_toward(scene, v, bsdf_pdf(b, wp, wn), next);
+}
+
 /* Radiance emitted from light vertex v toward `prev` (pbrt Vertex::Le). */
 inline float3 vertex_le(const SceneData* scene, const PathVertex* v, const PathVertex* prev) {
     if (!vertex_is_light(v)) return (float3)(0.0f);
