@@ -138,7 +138,7 @@ inline void path_tracer_sample(const SceneData* scene, Rng* rng, float2 raster, 
         }
         v.beta = beta;
         /* The forward density from the positions, as random_walk (cl/walk.h says why). */
-        if (i > 1 && !prev.delta) pdf_fwd = bsdf_pdf(&prev_bsdf, prev.wo, normalize(v.p - prev.p));
+        if (i > 1 && !prev.delta) pdf_fwd = bsdf_pdf(&prev_bsdf, prev.wo, direction_from(&prev, &v));
         v.pdf_fwd = convert_density(scene, &prev, pdf_fwd, &v);
 
         int t = i + 1;

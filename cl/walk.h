@@ -50,6 +50,14 @@ inline void surface_vertex_from_hit(const SceneData* scene, const PathVertex* pr
     v->light = info.light;
 }
 
+/* The unit direction from prev to v, where the walk from prev found v. A surface vertex's wo is
+ * normalize(prev->p - v->p) (surface_vertex_from_hit), and negating a difference or a
+ * normalisation is exact: -wo is normalize(v->p - prev->p) bit for bit, without its 20-odd
+ * instructions. */
+inline float3 direction_from(const PathVertex* prev, const PathVertex* v) {
+    return v->type == VERTEX_SURFACE ? -v->wo : normalize(v->p - prev->p);
+}
+
 /* Extends a subpath: path[start - 1] is the vertex the ray (o, d) leaves (the camera or the
  * light vertex), with throughput beta and solid-angle density pdf_dir of d. Writes at most
  * max_vertices vertices from path[start] on and returns how many; stops before tracing a ray
@@ -124,7 +132,7 @@ inline int random_walk(const SceneData* scene, Rng* rng, float3 o, float3 d, flo
         /* A scattering predecessor: its forward density toward this vertex and its own
          * predecessor's reverse density, both from the positions (see above). */
         if (i > start && !prev->delta) {
-            float3 w = normalize(vertex->p - prev->p);
+            float3 w = direction_from(prev, vertex);
 #if STRATEGIES_READ_SUBPATH_PDF_REV
             float pdf_rev;
             vertex_scatter_pdfs(scene, prev, prev->wo, w, &pdf_fwd, &pdf_rev);
