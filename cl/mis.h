@@ -43,16 +43,13 @@ inline float mis_weight(const SceneData* scene, const StrategyMix* mix, const Pa
     /* The connection's endpoints: t = 1 replaces the camera vertex and (otherwise) s = 1 the
      * light vertex with the freshly sampled one; the subpath arrays are not read there (a path
      * tracer has no light subpath at all). */
-    PathVertex qs, pt;
-    if (t == 1) pt = *sampled;
-    else if (t > 0) pt = camera_path[t - 1];
-    if (s == 1 && t != 1) qs = *sampled;
-    else if (s > 0) qs = light_path[s - 1];
+    const PathVertex* pt = t == 1 ? sampled : (t > 0 ? &camera_path[t - 1] : 0);
+    const PathVertex* qs = s == 1 && t != 1 ? sampled : (s > 0 ? &light_path[s - 1] : 0);
     const PathVertex* qs_minus = s > 1 ? &light_path[s - 2] : 0;
     const PathVertex* pt_minus = t > 1 ? &camera_path[t - 2] : 0;
 
     /* Whether the path's emitter is an area light, for strategy_enabled's (1,1) rule. */
-    const PathVertex* emitter = s == 0 ? &pt : (s == 1 ? &qs : &light_path[0]);
+    const PathVertex* emitter = s == 0 ? pt : (s == 1 ? qs : &light_path[0]);
     int light_is_area = emitter->type == VERTEX_SURFACE || vertex_light_kind(scene, emitter) == LIGHT_AREA;
 
     /* A light sample (s = 1, t >= 2) takes its light with a probability of its own where
@@ -63,7 +60,7 @@ inline float mis_weight(const SceneData* scene, const StrategyMix* mix, const Pa
 #if defined(NEE_OWN_SELECTION) && INTEGRATOR != INTEGRATOR_LT /* a light tracer has no s = 1, t >= 2 */
     if (s + t >= 3) {
         /* the vertex a light sample would be taken from: the path's second from the light */
-        const PathVertex* sample_from = s == 0 ? pt_minus : (s == 1 ? &pt : &light_path[1]);
+        const PathVertex* sample_from = s == 0 ? pt_minus : (s == 1 ? pt : &light_path[1]);
         s1_scale = light_sample_selection_ratio(scene, emitter->light, sample_from->p);
     }
 #endif
@@ -76,19 +73,28 @@ inline float mis_weight(const SceneData* scene, const StrategyMix* mix, const Pa
     int camera_steps = min(t - 1, STRATEGY_MAX_LIGHT_VERTICES - s);
     int light_steps = min(s, STRATEGY_MAX_CAMERA_VERTICES - t);
     float pt_pdf_rev = 0.0f, pt_minus_pdf_rev = 0.0f, qs_pdf_rev = 0.0f, qs_minus_pdf_rev = 0.0f;
-    if (camera_steps >= 1)
-        pt_pdf_rev = s > 0 ? vertex_pdf(scene, &qs, qs_minus, &pt) : vertex_pdf_light_origin(scene, &pt, pt_minus);
-    if (camera_steps >= 2)
-        pt_minus_pdf_rev = s > 0 ? vertex_pdf(scene, &pt, &qs, pt_minus) : vertex_pdf_light(scene, &pt, pt_minus);
-    if (light_steps >= 1) qs_pdf_rev = vertex_pdf(scene, &pt, pt_minus, &qs);
-    if (light_steps >= 2) qs_minus_pdf_rev = vertex_pdf(scene, &qs, &pt, qs_minus);
+    /* Where both densities at an endpoint are needed (toward the other endpoint and toward its
+     * own predecessor), they come from one evaluation of its BSDF (vertex_pdfs_between). */
+    if (camera_steps >= 1 && light_steps >= 2)
+        vertex_pdfs_between(scene, qs, qs_minus, pt, &pt_pdf_rev, &qs_minus_pdf_rev);
+    else if (camera_steps >= 1)
+        pt_pdf_rev = s > 0 ? vertex_pdf(scene, qs, qs_minus, pt) : vertex_pdf_light_origin(scene, pt, pt_minus);
+    else if (light_steps >= 2)
+        qs_minus_pdf_rev = vertex_pdf(scene, qs, pt, qs_minus);
+    if (camera_steps >= 2 && light_steps >= 1 && s > 0)
+        vertex_pdfs_between(scene, pt, qs, pt_minus, &pt_minus_pdf_rev, &qs_pdf_rev);
+    else {
+        if (camera_steps >= 2)
+            pt_minus_pdf_rev = s > 0 ? vertex_pdf(scene, pt, qs, pt_minus) : vertex_pdf_light(scene, pt, pt_minus);
+        if (light_steps >= 1) qs_pdf_rev = vertex_pdf(scene, pt, pt_minus, qs);
+    }
 #ifdef HAS_MEDIA
     /* A density toward a vertex through a medium includes the segment's distance sampling: the
      * connection's own for the endpoints, the subpath's stored one for their predecessors. */
     if (s > 0) pt_pdf_rev *= to_pt;
     qs_pdf_rev *= to_qs;
-    if (pt_minus) pt_minus_pdf_rev *= pt.dist_rev;
-    if (qs_minus) qs_minus_pdf_rev *= qs.dist_rev;
+    if (pt_minus) pt_minus_pdf_rev *= pt->dist_rev;
+    if (qs_minus) qs_minus_pdf_rev *= qs->dist_rev;
 #endif
 
     /* With sample counts n_i (cl/strategies.h) each term is n_i p_i / (n_s p_s). */
@@ -100,7 +106,7 @@ inline float mis_weight(const SceneData* scene, const StrategyMix* mix, const Pa
     float ri = 1.0f;
     for (int i = t - 1; i >= t - camera_steps; --i) {
         float pdf_rev = i == t - 1 ? pt_pdf_rev : (i == t - 2 ? pt_minus_pdf_rev : camera_path[i].pdf_rev);
-        float pdf_fwd = i == t - 1 ? pt.pdf_fwd : camera_path[i].pdf_fwd;
+        float pdf_fwd = i == t - 1 ? pt->pdf_fwd : camera_path[i].pdf_fwd;
         int delta = i == t - 1 ? 0 : camera_path[i].delta;
         int rev_is_delta = i + 1 < t - 1 && camera_path[i + 1].delta;
         ri *= mis_ratio(pdf_rev, rev_is_delta, pdf_fwd, camera_path[i - 1].delta);
@@ -117,10 +123,10 @@ inline float mis_weight(const SceneData* scene, const StrategyMix* mix, const Pa
     ri = 1.0f;
     for (int i = s - 1; i >= s - light_steps; --i) {
         float pdf_rev = i == s - 1 ? qs_pdf_rev : (i == s - 2 ? qs_minus_pdf_rev : light_path[i].pdf_rev);
-        float pdf_fwd = i == s - 1 ? qs.pdf_fwd : light_path[i].pdf_fwd;
+        float pdf_fwd = i == s - 1 ? qs->pdf_fwd : light_path[i].pdf_fwd;
         int delta = i == s - 1 ? 0 : light_path[i].delta;
         int delta_light_vertex = i > 0 ? light_path[i - 1].delta
-                                       : vertex_is_delta_light(scene, s == 1 ? &qs : &light_path[0]);
+                                       : vertex_is_delta_light(scene, s == 1 ? qs : &light_path[0]);
         int rev_is_delta = (i + 1 < s - 1 && light_path[i + 1].delta) || (i == 0 && delta_light_vertex);
         ri *= mis_ratio(pdf_rev, rev_is_delta, pdf_fwd, delta_light_vertex);
         if (ri == 0.0f) break;

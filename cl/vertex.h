@@ -363,6 +363,23 @@ inline float vertex_pdf(const SceneData* scene, const PathVertex* v, const PathV
     return density_toward(scene, v, pdf_w, next);
 }
 
+/* vertex_pdf(v, a, b) into *toward_b and vertex_pdf(v, b, a) into *toward_a, from one
+ * evaluation of v's BSDF (vertex_scatter_pdfs) and one normalisation of each direction: the
+ * same operations, so the same values bit for bit. v is a surface or medium vertex. */
+inline void vertex_pdfs_between(const SceneData* scene, const PathVertex* v, const PathVertex* a, const PathVertex* b,
+                                float* toward_b, float* toward_a) {
+    *toward_a = *toward_b = 0.0f;
+    float3 wa = a->p - v->p, wb = b->p - v->p;
+    float da2 = length_squared(wa), db2 = length_squared(wb);
+    if (da2 == 0.0f || db2 == 0.0f) return;
+    wa *= rsqrt(da2);
+    wb *= rsqrt(db2);
+    float pdf_ab, pdf_ba;
+    vertex_scatter_pdfs(scene, v, wa, wb, &pdf_ab, &pdf_ba);
+    *toward_b = density_toward(scene, v, pdf_ab, b);
+    *toward_a = density_toward(scene, v, pdf_ba, a);
+}
+
 /* Whether nothing blocks the segment between two vertices. Both ends leave their surfaces by
  * their own error bounds (offset_ray_origin) and the occlusion test ignores hits within the
  * rounding error of t of either end, so the far vertex's own surface never blocks and an
