@@ -254,7 +254,8 @@ inline float3 vertex_f(const SceneData* scene, const PathVertex* v, const PathVe
 }
 
 /* vertex_f of surface vertex v whose BSDF b is at hand; *wi gets the unit direction toward
- * `next` (0 with the result where next is at v's point), for surface_vertex_pdf. */
+ * `next`, for surface_vertex_pdf (where next is at v's point, the result is 0 and *wi no
+ * direction). */
 inline float3 surface_vertex_f(const PathVertex* v, const Bsdf* b, const PathVertex* next, int mode, float3* wi) {
     *wi = next->p - v->p;
     float d2 = length_squared(*wi);
