@@ -169,7 +169,11 @@ TEST(StrategyPilotAdaptive, CreditsTheCameraImageNotTheLightImage) {
             EXPECT_LT(a.adaptive_variance_left, 0.95) << "pt's error near the light";
             EXPECT_GT(a.adaptive_extra_share, 0.0);
             EXPECT_LT(a.predicted_mse, p.predicted_mse);
-            EXPECT_GT(a.efficiency, p.efficiency) << "extra samples planned where they pay for their time";
+            // Efficiency at equal seconds per pass: the two pilots time their passes apart, and
+            // a pass of a few ms under a parallel ctest varies more than the gain (a.efficiency
+            // once came out 0.63x p.efficiency that way).
+            EXPECT_LT(a.predicted_mse * (1.0 + a.adaptive_extra_share), p.predicted_mse)
+                << "extra samples planned where they pay for their time";
         }
         if (a.integrator == Integrator::Lt) {
             saw_lt = true;
