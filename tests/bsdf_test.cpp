@@ -5,10 +5,9 @@
 //    horizon is a cell of its own, so the pdf's normalisation is tested too);
 //  - mirror and glass: the reflection law, Snell's law, the Fresnel lobe probabilities and the
 //    lobe weights (with the (eta_i/eta_t)^2 radiance scaling on refraction only in radiance mode).
-#include <cstring>
-
 #include <gtest/gtest.h>
 
+#include <cstring>
 #include <functional>
 
 #include "kernel_test_util.h"
