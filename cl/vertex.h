@@ -234,25 +234,6 @@ inline float correct_shading_normal(const PathVertex* v, float3 wo, float3 wi, i
     return 1.0f;
 }
 
-/* The scattering (or, for an area light vertex, emission) from v toward `next`. */
-inline float3 vertex_f(const SceneData* scene, const PathVertex* v, const PathVertex* next, int mode) {
-    float3 wi = next->p - v->p;
-    float d2 = length_squared(wi);
-    if (d2 == 0.0f) return (float3)(0.0f);
-    wi *= rsqrt(d2);
-    if (v->type == VERTEX_SURFACE) {
-        Bsdf b = vertex_bsdf(scene, v);
-        return bsdf_f(&b, v->wo, wi) * correct_shading_normal(v, v->wo, wi, mode);
-    }
-#ifdef HAS_MEDIA
-    /* sigma_s is in the vertex's throughput (cl/walk.h), as in pbrt-v3. */
-    if (v->type == VERTEX_MEDIUM) return (float3)(phase_hg(v->wo, wi, vertex_phase_g(scene, v)));
-#endif
-    if (v->type == VERTEX_LIGHT && vertex_light_kind(scene, v) == LIGHT_AREA)
-        return area_light_radiance(vertex_area_le(scene, v), v->ng, wi);
-    return (float3)(0.0f);
-}
-
 /* vertex_f of surface vertex v whose BSDF b is at hand; *wi gets the unit direction toward
  * `next`, for surface_vertex_pdf (where next is at v's point, the result is 0 and *wi no
  * direction). */
@@ -262,6 +243,26 @@ inline float3 surface_vertex_f(const PathVertex* v, const Bsdf* b, const PathVer
     if (d2 == 0.0f) return (float3)(0.0f);
     *wi *= rsqrt(d2);
     return bsdf_f(b, v->wo, *wi) * correct_shading_normal(v, v->wo, *wi, mode);
+}
+
+/* The scattering (or, for an area light vertex, emission) from v toward `next`. */
+inline float3 vertex_f(const SceneData* scene, const PathVertex* v, const PathVertex* next, int mode) {
+    if (v->type == VERTEX_SURFACE) {
+        Bsdf b = vertex_bsdf(scene, v);
+        float3 wi;
+        return surface_vertex_f(v, &b, next, mode, &wi);
+    }
+    float3 wi = next->p - v->p;
+    float d2 = length_squared(wi);
+    if (d2 == 0.0f) return (float3)(0.0f);
+    wi *= rsqrt(d2);
+#ifdef HAS_MEDIA
+    /* sigma_s is in the vertex's throughput (cl/walk.h), as in pbrt-v3. */
+    if (v->type == VERTEX_MEDIUM) return (float3)(phase_hg(v->wo, wi, vertex_phase_g(scene, v)));
+#endif
+    if (v->type == VERTEX_LIGHT && vertex_light_kind(scene, v) == LIGHT_AREA)
+        return area_light_radiance(vertex_area_le(scene, v), v->ng, wi);
+    return (float3)(0.0f);
 }
 
 /* vertex_pdf of surface vertex v whose BSDF b is at hand, toward `next` along wn (from

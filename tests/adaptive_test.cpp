@@ -97,17 +97,16 @@ int middle_row_tier(const AdaptivePlan& plan, int x) {
 TEST(AdaptivePlan, CostlierPixelsGetFewerSamples) {
     const int w = kEdgesWidth, h = kEdgesHeight, spp = kEdgesSpp;
     Film film = two_edges_film();
-    auto tier_at = middle_row_tier;
     const AdaptivePlan same_cost = plan_adaptive_samples(film);
-    EXPECT_GT(tier_at(same_cost, 10), 0);
-    EXPECT_EQ(tier_at(same_cost, 10), tier_at(same_cost, 30));
+    EXPECT_GT(middle_row_tier(same_cost, 10), 0);
+    EXPECT_EQ(middle_row_tier(same_cost, 10), middle_row_tier(same_cost, 30));
 
     film.camera_rays.assign(size_t(w) * h, 0.0);
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) film.camera_rays[size_t(y) * w + x] = spp * (x < 20 ? 1.0 : 16.0);
     const AdaptivePlan by_cost = plan_adaptive_samples(film);
-    EXPECT_GT(tier_at(by_cost, 10), 0);
-    EXPECT_EQ(tier_at(by_cost, 10) - tier_at(by_cost, 30), 2);
+    EXPECT_GT(middle_row_tier(by_cost, 10), 0);
+    EXPECT_EQ(middle_row_tier(by_cost, 10) - middle_row_tier(by_cost, 30), 2);
 }
 
 // An outline whose pixels' samples spread widely (variance 1000) but whose two halves of
@@ -118,10 +117,9 @@ TEST(AdaptivePlan, CostlierPixelsGetFewerSamples) {
 TEST(AdaptivePlan, StratifiedOutlinesAreNotRefinedForTheirSpread) {
     const int w = kEdgesWidth, h = kEdgesHeight, spp = kEdgesSpp;
     Film film = two_edges_film();
-    auto tier_at = middle_row_tier;
     const AdaptivePlan spread_only = plan_adaptive_samples(film);
-    EXPECT_GT(tier_at(spread_only, 10), 0);
-    EXPECT_GT(tier_at(spread_only, 30), 0);
+    EXPECT_GT(middle_row_tier(spread_only, 10), 0);
+    EXPECT_GT(middle_row_tier(spread_only, 30), 0);
 
     film.late_from = spp / 2;
     film.camera_late.assign(size_t(w) * h * 3, 0.0);
@@ -141,8 +139,8 @@ TEST(AdaptivePlan, StratifiedOutlinesAreNotRefinedForTheirSpread) {
             film.camera_sum[p * 3] = (spp / 2) * (m + e) + film.camera_late[p * 3];
         }
     const AdaptivePlan with_halves = plan_adaptive_samples(film);
-    EXPECT_EQ(tier_at(with_halves, 10), 0) << "a stratified outline";
-    EXPECT_GT(tier_at(with_halves, 30), 0) << "an outline of independent noise";
+    EXPECT_EQ(middle_row_tier(with_halves, 10), 0) << "a stratified outline";
+    EXPECT_GT(middle_row_tier(with_halves, 30), 0) << "an outline of independent noise";
 }
 
 // Changing one pixel's own samples, however much, changes its neighbours' plans but never its

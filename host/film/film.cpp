@@ -2,29 +2,26 @@
 
 namespace clbdpt {
 
+namespace {
+
+// Adds an optional per-pixel array (empty where the film does not keep it) into another,
+// which starts at zero if it had none; returns whether there was anything to add.
+bool add_kept(std::vector<double>& into, const std::vector<double>& from) {
+    if (from.empty()) return false;
+    if (into.empty()) into.assign(from.size(), 0.0);
+    for (size_t i = 0; i < into.size(); ++i) into[i] += from[i];
+    return true;
+}
+
+}  // namespace
+
 void Film::add(const Film& other) {
     for (size_t i = 0; i < camera_sum.size(); ++i) camera_sum[i] += other.camera_sum[i];
     for (size_t i = 0; i < light_sum.size(); ++i) light_sum[i] += other.light_sum[i];
-    if (!other.camera_sq.empty()) {
-        if (camera_sq.empty()) camera_sq.assign(other.camera_sq.size(), 0.0);
-        for (size_t i = 0; i < camera_sq.size(); ++i) camera_sq[i] += other.camera_sq[i];
-    }
-    if (!other.camera_late.empty()) {
-        if (camera_late.empty()) camera_late.assign(other.camera_late.size(), 0.0);
-        for (size_t i = 0; i < camera_late.size(); ++i) camera_late[i] += other.camera_late[i];
-        late_from = other.late_from;
-    }
-    if (!other.camera_rays.empty()) {
-        if (camera_rays.empty()) camera_rays.assign(other.camera_rays.size(), 0.0);
-        for (size_t i = 0; i < camera_rays.size(); ++i) camera_rays[i] += other.camera_rays[i];
-    }
-    if (!other.strategy_sum.empty()) {
-        if (strategy_sum.empty()) {
-            strategy_sum.assign(other.strategy_sum.size(), 0.0);
-            strategy_stride = other.strategy_stride;
-        }
-        for (size_t i = 0; i < strategy_sum.size(); ++i) strategy_sum[i] += other.strategy_sum[i];
-    }
+    add_kept(camera_sq, other.camera_sq);
+    if (add_kept(camera_late, other.camera_late)) late_from = other.late_from;
+    add_kept(camera_rays, other.camera_rays);
+    if (add_kept(strategy_sum, other.strategy_sum)) strategy_stride = other.strategy_stride;
     spp += other.spp;
 }
 
