@@ -199,5 +199,39 @@ TEST(StrategyCandidates, SharedTailIsWhatEveryCameraCandidateHasAlike) {
     for (double v : shared_tail_terms({&pt, &other})) EXPECT_EQ(v, 0.0);
 }
 
+// A pixel where every camera candidate's term is at least kRarePathFactor times its own mean is
+// a rare path that all of them met: left out of each. Where one candidate's term there is
+// ordinary (pt's own firefly, which the mixes render smoothly), the pixel stays.
+TEST(StrategyCandidates, RareSharedPixelsAreRareInEveryCameraCandidate) {
+    const size_t items = 2000;
+    std::vector<double> pt(items, 0.01), mix(items, 0.02);
+    pt[5] = 300.0, mix[5] = 60.0;   // one rare path, weighted 5x apart: rare in both
+    pt[6] = 300.0, mix[6] = 0.5;    // pt's own firefly: 25x the mix's mean, not 100x
+    pt[7] = 0.5, mix[7] = 300.0;    // the mix's own
+    // The means: pt (1999 x 0.01 ... + 600.5) / 2000 = 0.31, the mix 0.20; 100x of them: 31 and 20.
+    const std::vector<bool> rare = rare_shared_pixels({&pt, &mix});
+    ASSERT_EQ(rare.size(), items);
+    EXPECT_TRUE(rare[5]);
+    EXPECT_FALSE(rare[6]);
+    EXPECT_FALSE(rare[7]);
+    size_t count = 0;
+    for (bool r : rare) count += r ? 1 : 0;
+    EXPECT_EQ(count, 1u);
+    // The mix's term at pixel 5 at 0.99 and 1.01 of the factor times its mean (which that term
+    // is part of: x = F (rest + x) / n at x = F rest / (n - F)).
+    std::vector<double> mix_at = mix;
+    double rest = 0;
+    for (size_t i = 0; i < items; ++i) rest += i == 5 ? 0.0 : mix[i];
+    const double at_factor = kRarePathFactor * rest / (double(items) - kRarePathFactor);
+    mix_at[5] = 0.99 * at_factor;
+    EXPECT_FALSE(rare_shared_pixels({&pt, &mix_at})[5]);
+    mix_at[5] = 1.01 * at_factor;
+    EXPECT_TRUE(rare_shared_pixels({&pt, &mix_at})[5]);
+    // One camera candidate (pt beside lt): nothing to compare with; a black image: nothing rare.
+    for (bool r : rare_shared_pixels({&pt})) EXPECT_FALSE(r);
+    std::vector<double> black(items, 0.0);
+    for (bool r : rare_shared_pixels({&black, &black})) EXPECT_FALSE(r);
+}
+
 }  // namespace
 }  // namespace clbdpt

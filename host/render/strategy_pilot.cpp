@@ -393,6 +393,25 @@ std::vector<double> shared_tail_terms(const std::vector<const std::vector<double
     return shared;
 }
 
+std::vector<bool> rare_shared_pixels(const std::vector<const std::vector<double>*>& camera_terms) {
+    const size_t items = camera_terms.empty() ? 0 : camera_terms[0]->size();
+    std::vector<bool> rare(items, false);
+    if (camera_terms.size() < 2 || items == 0) return rare;
+    std::vector<double> thresholds;
+    for (const std::vector<double>* terms : camera_terms) {
+        double sum = 0;
+        for (double v : *terms) sum += v;
+        thresholds.push_back(kRarePathFactor * sum / double(items));
+    }
+    for (size_t item = 0; item < items; ++item) {
+        bool in_every = true;
+        for (size_t c = 0; c < camera_terms.size() && in_every; ++c)
+            in_every = (*camera_terms[c])[item] > thresholds[c];
+        rare[item] = in_every;
+    }
+    return rare;
+}
+
 StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene, const RenderOptions& options,
                                  int spp, double time_budget, bool adaptive, RenderStats* stats) {
     using Clock = std::chrono::steady_clock;
@@ -464,6 +483,7 @@ StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene
         if (pilot.candidates[size_t(i)].integrator != Integrator::Lt)
             camera_terms.push_back(&transport[size_t(i)].one_terms);
     const std::vector<double> shared_tail = shared_tail_terms(camera_terms);
+    const std::vector<bool> rare_paths = rare_shared_pixels(camera_terms);
 
     for (int i = 0; i < k; ++i) {
         StrategyCandidate& c = pilot.candidates[size_t(i)];
@@ -479,11 +499,12 @@ StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene
         const double n_set = kPilotSetSize;
         c.variance_transport_stratified =
             std::min(c.variance_transport, median_group_difference(t.one, t.set) * n_set / (n_set - 1.0));
-        // The candidate's own terms, less the shared tail; lt's terms were not compared (it has
-        // no camera subpath): it keeps them all.
+        // The candidate's own terms, less the shared tail and the rare shared paths; lt's terms
+        // were not compared (it has no camera subpath): it keeps them all.
         std::vector<double> own_terms = t.one_terms;
         if (c.integrator != Integrator::Lt)
-            for (int item = 0; item < items; ++item) own_terms[size_t(item)] -= shared_tail[size_t(item)];
+            for (size_t item = 0; item < size_t(items); ++item)
+                own_terms[item] = rare_paths[item] ? 0.0 : own_terms[item] - shared_tail[item];
         GroupedVariance own;
         for (int item = 0; item < items; ++item) own.add(item, own_terms[size_t(item)]);
         const double own_hedge_error = standard_error_without_largest(own_terms, kHedgeLeavesOut);
@@ -493,10 +514,12 @@ StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene
         const double n = time_budget > 0 && c.seconds_per_pass > 0 ? std::max(1.0, time_budget / c.seconds_per_pass)
                                                                     : double(std::max(spp, 1));
         c.predicted_spp = n;
-        // With adaptive sampling, what its plan leaves of the camera image's 1/N variance (the
-        // terms below), for what extra samples (their time counts).
+        // With adaptive sampling, what its plan leaves of the camera image's 1/N variance, for
+        // what extra samples (their time counts). The share is of the candidate's own terms,
+        // those it is applied to below, without the pixels left out above (which the plan
+        // rarely refines: a lone large sample does not raise its pixel's second pair term).
         if (adaptive && spp > 0) {
-            const AdaptiveEffect a = adaptive_effect(t.one_terms, t.second_pair_terms, spp, light.mean);
+            const AdaptiveEffect a = adaptive_effect(own_terms, t.second_pair_terms, spp, light.mean);
             c.adaptive_variance_left = a.variance_left;
             c.adaptive_extra_share = a.extra_share;
         }

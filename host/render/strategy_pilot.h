@@ -29,7 +29,8 @@
 // squared error of N samples is predicted as A / N + B / N^2 + v_pixel / N^1.5, and the
 // candidate with the least error times time (N x seconds per sample, from its fastest pass) is
 // chosen: the inverse of Grittmann et al.'s efficiency. A leaves out the samples that every
-// camera candidate has alike (shared_tail_terms) and counts two standard errors high, so that a
+// camera candidate has alike (shared_tail_terms), and the pixels where every camera candidate
+// met the same rare path (rare_shared_pixels), and counts two standard errors high, so that a
 // candidate whose fireflies the grid happened to miss is not chosen for them (the standard error
 // without the grid's largest terms, which are in A already). The light image
 // (t = 1) takes no part in the grid's terms: its variance is estimated from the squares of all
@@ -61,7 +62,8 @@ struct StrategyCandidate {
     // than 1/N: N samples' transport variance is A / N + B / N^2.
     double variance_transport_stratified = 0;
     // The part of variance_transport from the grid's few pixels where every camera candidate has
-    // the same large term: left out of the prediction (see run_strategy_pilot).
+    // the same large term (shared_tail_terms) or met the same rare path (rare_shared_pixels):
+    // left out of the prediction (see run_strategy_pilot).
     double variance_shared_tail = 0;
     double variance_pixel = 0;
     // With adaptive sampling: the share of the camera image's 1/N transport variance that its
@@ -153,6 +155,22 @@ bool path_traced_extra_samples(const std::vector<StrategyCandidate>& candidates,
 constexpr double kSharedTailShare = 0.01;
 constexpr double kSharedTailTolerance = 0.05;
 std::vector<double> shared_tail_terms(const std::vector<const std::vector<double>*>& camera_terms);
+
+// Per grid pixel, whether every camera candidate's term there is at least kRarePathFactor times
+// that candidate's mean term: a rare path that the candidates' shared seeds sampled in each of
+// them, and that each weights differently (on veach-mis, seed 10031: two pixels of 2 752 held
+// 0.51 of the full bdpt mix's 0.78 and 1.33 of pt's 1.87, pt's terms 1.3-4.3x the mix's, beyond
+// kSharedTailTolerance). Whether the render meets such a path 100 times or none is beyond what
+// a grid that met it once or twice can say, yet its unequal weights decided the choice: pt lost
+// to a mix with 0.1-0.45x its efficiency in 3 of 40 seeds on veach-mis, and in 7 of 40 on sky
+// (where pt is 1.3-1.5x the mixes). The prediction leaves these pixels out of every camera
+// candidate; a candidate's own fireflies (pt's in fog, where the mixes' terms stay small) stay
+// in. With a factor of 100, the default chose pt in 40 of 40 seeds on both, and kept its choices
+// on cornell-specular, cornell-fog and fog-spot (a BDPT mix in 36 of 36 seeds each), lamp-ceiling
+// (lt) and the Cornell box (pt); with 30, fog-spot went to pt once in 12; with 300, veach-mis and
+// sky each went to a mix once in 40. With fewer than two camera candidates, none.
+constexpr double kRarePathFactor = 100.0;
+std::vector<bool> rare_shared_pixels(const std::vector<const std::vector<double>*>& camera_terms);
 
 // Renders the pilot of every candidate on `device` (stats gain its samples, rays and build
 // time) and picks the candidate with the least predicted error x time at `spp` samples, or,
