@@ -165,10 +165,11 @@ std::vector<double> shared_tail_terms(const std::vector<const std::vector<double
 // to a mix with 0.1-0.45x its efficiency in 3 of 40 seeds on veach-mis, and in 7 of 40 on sky
 // (where pt is 1.3-1.5x the mixes). The prediction leaves these pixels out of every camera
 // candidate; a candidate's own fireflies (pt's in fog, where the mixes' terms stay small) stay
-// in. With a factor of 100, the default chose pt in 40 of 40 seeds on both, and kept its choices
-// on cornell-specular, cornell-fog and fog-spot (a BDPT mix in 36 of 36 seeds each), lamp-ceiling
-// (lt) and the Cornell box (pt); with 30, fog-spot went to pt once in 12; with 300, veach-mis and
-// sky each went to a mix once in 40. With fewer than two camera candidates, none.
+// in. With a factor of 100, the default chose pt in 40 of 40 seeds on veach-mis and in 39 on
+// sky, and kept its choices on cornell-specular, cornell-fog and fog-spot (a BDPT mix in 36 of
+// 36 seeds each), lamp-ceiling (lt) and the Cornell box (pt); with 30, fog-spot went to pt once
+// in 12; with 300, veach-mis and sky each went to a mix once in 40. With fewer than two camera
+// candidates, none.
 constexpr double kRarePathFactor = 100.0;
 std::vector<bool> rare_shared_pixels(const std::vector<const std::vector<double>*>& camera_terms);
 
