@@ -163,7 +163,7 @@ std::vector<double> shared_tail_terms(const std::vector<const std::vector<double
 // kSharedTailTolerance). Whether the render meets such a path 100 times or none is beyond what
 // a grid that met it once or twice can say, yet its unequal weights decided the choice: pt lost
 // to a mix with 0.1-0.45x its efficiency in 3 of 40 seeds on veach-mis, and in 7 of 40 on sky
-// (where pt is 1.3-1.4x the mixes). The prediction leaves these pixels out of every camera
+// (where pt is 1.4-1.6x the mixes). The prediction leaves these pixels out of every camera
 // candidate; a candidate's own fireflies (pt's in fog, where the mixes' terms stay small) stay
 // in. With a factor of 100, the default chose pt in 40 of 40 seeds on veach-mis and in 39 on
 // sky, and kept its choices on cornell-specular, cornell-fog and fog-spot (a BDPT mix in 36 of
