@@ -108,8 +108,7 @@ TEST(StrategyPilotVariance, TransportVarianceMatchesFullPasses) {
     }
 }
 
-// cornell-specular: BDPT without inner connections (with a light subpath per sample; the pilot's
-// candidate now traces half one) renders the glass sphere's caustics far
+// cornell-specular: BDPT without inner connections renders the glass sphere's caustics far
 // better than pt (64 spp with adaptive sampling: MSE 1.0e-4 against 4.5e-4, for 2.7x the time;
 // without adaptive sampling 2.2e-4 against 6.1e-4), but every candidate also meets the same few
 // samples through the mirror onto the caustic, which only the camera subpath reaches. Counted
@@ -130,7 +129,7 @@ TEST(StrategyPilotChoice, CornellSpecularPredictsTheCausticsOfPt) {
         double pt = 0, mix = 0;
         for (const StrategyCandidate& c : pilot.candidates) {
             if (c.integrator == Integrator::Pt) pt = c.predicted_mse;
-            if (c.integrator == Integrator::Bdpt && !c.inner_connections)
+            if (c.integrator == Integrator::Bdpt && c.light_subpaths == 1.0f && !c.inner_connections)
                 mix = c.predicted_mse;
             shared_tail = std::max(shared_tail, c.variance_shared_tail);
         }

@@ -300,19 +300,16 @@ bool light_tracing_is_a_candidate(const DeviceScene& scene) {
 
 std::vector<StrategyCandidate> strategy_candidates(bool with_light_tracing) {
     // Full bdpt; half the light subpaths (they cost as much as the camera subpath but pay off
-    // only where light arrives indirectly); path tracing plus light tracing from half the
-    // samples (caustics seen directly, without the connections' cost); path tracing alone, with
-    // its own leaner kernel; and, where light_tracing_is_a_candidate, light tracing alone, as
-    // lean (a lamp aimed at the ceiling: 1.4x bdpt's efficiency, whose camera subpaths and
-    // connections add little there). (A quarter of the light subpaths was a candidate too; it
-    // won on none of the bundled scenes, so its pilot time is saved.) Path tracing plus light
-    // tracing took a light subpath per sample until 2026-11-27; with half, its efficiency was
-    // 1.13x on cornell-specular and 1.17x on cornell-fog, 0.89x on fog-spot, where full bdpt
-    // does as well as the mix with a light subpath per sample did (64 spp, 3 seeds each).
+    // only where light arrives indirectly); path tracing plus light tracing (caustics seen
+    // directly, without the connections' cost); path tracing alone, with its own leaner kernel;
+    // and, where light_tracing_is_a_candidate, light tracing alone, as lean (a lamp aimed at the
+    // ceiling: 1.4x bdpt's efficiency, whose camera subpaths and connections add little there).
+    // (A quarter of the light subpaths was a candidate too; it won on none of the bundled
+    // scenes, so its pilot time is saved.)
     std::vector<StrategyCandidate> c(with_light_tracing ? 5 : 4);
     c[0].light_subpaths = 1.0f;
     c[1].light_subpaths = 0.5f;
-    c[2].light_subpaths = 0.5f;
+    c[2].light_subpaths = 1.0f;
     c[2].inner_connections = false;
     c[3].integrator = Integrator::Pt;
     if (with_light_tracing) c[4].integrator = Integrator::Lt;
