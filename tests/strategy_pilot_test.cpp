@@ -206,9 +206,9 @@ TEST(StrategyCandidates, RareSharedPixelsAreRareInEveryCameraCandidate) {
     const size_t items = 2000;
     std::vector<double> pt(items, 0.01), mix(items, 0.02);
     pt[5] = 300.0, mix[5] = 60.0;   // one rare path, weighted 5x apart: rare in both
-    pt[6] = 300.0, mix[6] = 0.5;    // pt's own firefly: 25x the mix's mean, not 100x
+    pt[6] = 300.0, mix[6] = 0.5;    // pt's own firefly: the mix's term 2.5x its mean, not 100x
     pt[7] = 0.5, mix[7] = 300.0;    // the mix's own
-    // The means: pt (1999 x 0.01 ... + 600.5) / 2000 = 0.31, the mix 0.20; 100x of them: 31 and 20.
+    // The means: pt (1997 x 0.01 + 600.5) / 2000 = 0.31, the mix 0.20; 100x of them: 31 and 20.
     const std::vector<bool> rare = rare_shared_pixels({&pt, &mix});
     ASSERT_EQ(rare.size(), items);
     EXPECT_TRUE(rare[5]);

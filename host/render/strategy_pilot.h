@@ -159,7 +159,7 @@ std::vector<double> shared_tail_terms(const std::vector<const std::vector<double
 // Per grid pixel, whether every camera candidate's term there is at least kRarePathFactor times
 // that candidate's mean term: a rare path that the candidates' shared seeds sampled in each of
 // them, and that each weights differently (on veach-mis, seed 10031: two pixels of 2 752 held
-// 0.51 of the full bdpt mix's 0.78 and 1.33 of pt's 1.87, pt's terms 1.3-4.3x the mix's, beyond
+// 0.51 of the full bdpt mix's 0.78 and 1.33 of pt's 1.87, pt's terms 1.1-4.3x the mix's, beyond
 // kSharedTailTolerance). Whether the render meets such a path 100 times or none is beyond what
 // a grid that met it once or twice can say, yet its unequal weights decided the choice: pt lost
 // to a mix with 0.1-0.45x its efficiency in 3 of 40 seeds on veach-mis, and in 7 of 40 on sky
