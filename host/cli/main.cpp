@@ -520,8 +520,12 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
                                 [] { return interrupt_signal() != 0; });
         adaptive_seconds = seconds_since(adaptive_start);
         st.seconds += adaptive_seconds;
-        // The renderers' profiles (--profile) now hold the extra samples' launches too.
-        st.profile = RenderProfile();
+        // The renderers' profiles (--profile) now hold the extra samples' launches too; the
+        // adding thread's figures are the passes' (the extra samples are added as they come).
+        RenderProfile queue_profile;
+        queue_profile.film_add_seconds = st.profile.film_add_seconds;
+        queue_profile.backlog_wait_seconds = st.profile.backlog_wait_seconds;
+        st.profile = queue_profile;
         for (Renderer* r : renderer_list) st.profile.add(r->stats().profile);
         if (extra_renderer != renderer_list.front()) st.profile.add(extra_renderer->stats().profile);
     }
@@ -653,6 +657,16 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
         row("render kernel (device)", p.kernel_seconds);
         row("read-back (device)", p.transfer_seconds);
         row("accumulation (host)", p.accumulate_seconds);
+        // The host's other steps overlap the rows above (threads of their own, or the device
+        // busy meanwhile), so they are shares of the passes' wall time instead.
+        auto wall_row = [&](const char* what, double seconds) {
+            std::fprintf(stderr, "clbdpt: profile: %-28s %9.3f s  %5.1f%% of wall\n", what, seconds,
+                         st.seconds > 0 ? 100.0 * seconds / st.seconds : 0.0);
+        };
+        wall_row("result buffers (host)", p.buffers_seconds);
+        wall_row("adding to the film (host)", p.film_add_seconds);
+        wall_row("waiting for the adding", p.backlog_wait_seconds);
+        wall_row("render kernel, of wall", p.kernel_seconds);
         std::fprintf(stderr, "clbdpt: profile: kernel time per sample %.3f us, per ray %.3f us\n",
                      st.samples ? 1e6 * p.kernel_seconds / double(st.samples) : 0.0,
                      st.rays ? 1e6 * p.kernel_seconds / double(st.rays) : 0.0);

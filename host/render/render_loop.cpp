@@ -42,7 +42,8 @@ std::vector<RenderedItems> DeviceWorker::render(const std::vector<ItemRun>& runs
         pass.sample_index = pass.position_sample_index = first.pass;
         pass.seed = pass.position_seed = renderer_.options().seed;
         if (n > 1) pass.run_length = pass_items;  // item i: pixel i % pass_items, pass + i / pass_items
-        out.push_back(renderer_.render_items(pass, first.first_item, int(items), cancelled));
+        out.push_back(renderer_.render_items(pass, first.first_item, int(items), cancelled,
+                                             pool_ ? pool_->take() : RenderedItems{}));
         k += n;
     }
     return out;
@@ -63,6 +64,10 @@ Film render_image(const std::vector<UnitWorker*>& workers, int width, int height
     const WorkUnits units(width * height, first_pass);
     const auto start = Clock::now();
     UnitQueue queue(units, &film, options.spp - first_pass, options.time_budget, start, int(workers.size()));
+    // Results come back once added, for the workers to reuse their buffers.
+    RenderedItemsPool pool;
+    queue.set_result_pool(&pool);
+    for (UnitWorker* w : workers) w->set_result_pool(&pool);
     std::exception_ptr failure;
     std::mutex failure_mutex;
     std::vector<std::string> dropped_devices;
@@ -126,6 +131,7 @@ Film render_image(const std::vector<UnitWorker*>& workers, int width, int height
     }
     for (std::thread& t : threads) t.join();
     adder.join();
+    for (UnitWorker* w : workers) w->set_result_pool(nullptr);
     const double seconds = seconds_since(start);
     if (failure) std::rethrow_exception(failure);
     if (options.progress) options.progress(first_pass + queue.passes_done(), planned, seconds);
@@ -135,6 +141,8 @@ Film render_image(const std::vector<UnitWorker*>& workers, int width, int height
         total.add_counts(queue.counts());
         total.seconds = seconds;
         total.first_pass_seconds = queue.first_pass_seconds();
+        total.profile.film_add_seconds = queue.film_add_seconds();
+        total.profile.backlog_wait_seconds = queue.backlog_wait_seconds();
         total.dropped_devices = dropped_devices;
         const std::vector<UnitQueue::WorkerShare> shares = queue.shares();
         for (size_t w = 0; w < workers.size(); ++w)

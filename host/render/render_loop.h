@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "film/film.h"
+#include "film/rendered_items_pool.h"
 #include "render/renderer.h"
 #include "render/work_units.h"
 
@@ -48,6 +49,9 @@ public:
     // true means another device has delivered these runs, and the results will be discarded.
     virtual std::vector<RenderedItems> render(const std::vector<ItemRun>& runs,
                                               const std::function<bool()>& cancelled) = 0;
+    // Where results whose items are in the film come back to, for render() to reuse their
+    // buffers (null: none; a worker may also ignore it).
+    virtual void set_result_pool(RenderedItemsPool* pool) { (void)pool; }
 };
 
 // A Renderer as a UnitWorker.
@@ -57,6 +61,7 @@ public:
     std::string name() const override;
     std::vector<RenderedItems> render(const std::vector<ItemRun>& runs,
                                       const std::function<bool()>& cancelled) override;
+    void set_result_pool(RenderedItemsPool* pool) override { pool_ = pool; }
 
     // Items rendered in one go at most when runs of several passes are joined: the result's
     // camera values (12 bytes an item, 24 MiB) stay below glibc's largest mmap threshold, so
@@ -65,6 +70,7 @@ public:
 
 private:
     Renderer& renderer_;
+    RenderedItemsPool* pool_ = nullptr;
 };
 
 // renderers: one per device, built with the same scene and options; more_workers: devices of

@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <iterator>
+#include <numeric>
 #include <optional>
 #include <thread>
 
@@ -292,6 +294,9 @@ void Renderer::collect_range(CollectedRange& range, float* camera_dst, float* ra
         if (!finite) {
             range.splats.resize(splats_before);
             range.dropped.push_back(i);
+            // Every item is written: the result's buffers may be reused ones, not zeroed.
+            dst[0] = dst[1] = dst[2] = 0.0f;
+            if (rays_dst) rays_dst[i] = 0.0f;
             continue;
         }
         dst[0] = c[0];
@@ -304,7 +309,7 @@ void Renderer::collect_range(CollectedRange& range, float* camera_dst, float* ra
 }
 
 void Renderer::collect(RenderedItems& out, const PassSpec& pass, const LaunchSlot& slot, int first_item,
-                       int item_count) const {
+                       int item_count) {
     // Item i of this launch is item first_item - out.first_item + i of `out`.
     const int offset = first_item - out.first_item;
     float* camera_dst = &out.camera[size_t(offset) * 3];
@@ -314,7 +319,15 @@ void Renderer::collect(RenderedItems& out, const PassSpec& pass, const LaunchSlo
     // splat list; the lists are joined in item order, so the result does not depend on it.
     const int min_items = options_.collect_threads > 0 ? 1 : kMinItemsPerCollectThread;  // as asked (tests)
     const int threads = std::min(collect_threads_, std::max(1, item_count / min_items));
-    std::vector<CollectedRange> ranges(static_cast<size_t>(threads));
+    // The ranges' lists keep their memory from launch to launch (a fresh list's pages, faulted
+    // in for every launch, were most of a GPU's collection time).
+    ranges_.resize(size_t(threads));
+    std::vector<CollectedRange>& ranges = ranges_;
+    for (CollectedRange& r : ranges) {
+        r.splats.clear();
+        r.dropped.clear();
+        r.rays = 0;
+    }
     if (threads == 1) {
         ranges[0].splats.swap(out.splats);  // appended to in place
         collect_range(ranges[0], camera_dst, rays_dst, slot, 0, item_count);
@@ -323,12 +336,23 @@ void Renderer::collect(RenderedItems& out, const PassSpec& pass, const LaunchSlo
         std::vector<std::thread> workers;
         for (int t = 0; t < threads; ++t) {
             const int begin = int(int64_t(item_count) * t / threads), end = int(int64_t(item_count) * (t + 1) / threads);
-            if (splat_slots_ > 0) ranges[size_t(t)].splats.reserve(size_t(end - begin) * std::min(splat_slots_, 4));
             workers.emplace_back(
                 [&, t, begin, end] { collect_range(ranges[size_t(t)], camera_dst, rays_dst, slot, begin, end); });
         }
         for (std::thread& w : workers) w.join();
-        for (const CollectedRange& r : ranges) out.splats.insert(out.splats.end(), r.splats.begin(), r.splats.end());
+        // The lists are joined in item order, each copied by a thread of its own.
+        size_t joined = out.splats.size();
+        out.splats.resize(joined + std::accumulate(ranges.begin(), ranges.end(), size_t(0),
+                                                   [](size_t n, const CollectedRange& r) { return n + r.splats.size(); }));
+        workers.clear();
+        for (const CollectedRange& r : ranges) {
+            if (!r.splats.empty())
+                workers.emplace_back([&r, dst = out.splats.data() + joined] {
+                    std::memcpy(static_cast<void*>(dst), r.splats.data(), sizeof(SplatRecord) * r.splats.size());
+                });
+            joined += r.splats.size();
+        }
+        for (std::thread& w : workers) w.join();
     }
     for (const CollectedRange& r : ranges) {
         out.counts.rays += r.rays;
@@ -376,8 +400,19 @@ void Renderer::render_passes(Film& film, uint32_t first_sample, int count) {
     }
 }
 
+namespace {
+
+// Resizes a reused buffer without copying or zeroing what it held where it is large enough.
+template <class T>
+void resize_reused(std::vector<T>& v, size_t n) {
+    if (v.capacity() < n) v.clear();  // growing would copy the old values first
+    v.resize(n);
+}
+
+}  // namespace
+
 RenderedItems Renderer::render_items(const PassSpec& pass, int first_item, int item_count,
-                                    const std::function<bool()>& cancelled) {
+                                    const std::function<bool()>& cancelled, RenderedItems reuse) {
     if (pass.pixel_stride < 1) throw Error("pixel stride must be at least 1");
     RenderedItems out;
     out.sample_index = pass.sample_index;
@@ -399,11 +434,23 @@ RenderedItems Renderer::render_items(const PassSpec& pass, int first_item, int i
         }
         run_pixels_list_ = pass.run_pixels;
     }
-    out.camera.assign(size_t(item_count) * 3, 0.0f);
-    out.rays.assign(size_t(item_count), 0.0f);
+    const auto buffers_start = std::chrono::steady_clock::now();
+    // Every item's camera value and rays are written when its launch is collected.
+    out.camera = std::move(reuse.camera);
+    resize_reused(out.camera, size_t(item_count) * 3);
+    out.rays = std::move(reuse.rays);
+    resize_reused(out.rays, size_t(item_count));
+    out.splats = std::move(reuse.splats);
+    out.splats.clear();
+    out.dropped_items = std::move(reuse.dropped_items);
+    out.dropped_items.clear();
+    out.strategy_splats = std::move(reuse.strategy_splats);
+    out.strategy_splats.clear();
     // Light subpaths leave a few splats each (measured: 2-4 at max depth 5 on the bundled
     // scenes); reserving them saves most of the vector's regrowth.
     if (splat_slots_ > 0) out.splats.reserve(size_t(item_count) * std::min(splat_slots_, 4));
+    stats_.profile.buffers_seconds +=
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - buffers_start).count();
     out.strategy_slots = strategy_slots_;
     out.strategy_stride = strategy_slots_ > 0 ? options_.max_depth + 3 : 0;
     // Launch k + 1 is enqueued before launch k is collected, so the device does not wait for

@@ -66,16 +66,22 @@ struct RenderOptions {
 };
 
 // Where a render's time goes (--profile): the render kernel and the read-back of its outputs
-// from OpenCL profiling events, the host's accumulation of camera sums and splat records from
-// a clock.
+// from OpenCL profiling events, the host's work from a clock. On a GPU the host's work is what
+// the device waits for, so each of its steps has a figure of its own.
 struct RenderProfile {
     double kernel_seconds = 0;
     double transfer_seconds = 0;
-    double accumulate_seconds = 0;
+    double accumulate_seconds = 0;  // a device thread collecting its launches' outputs
+    double buffers_seconds = 0;     // a device thread making a run's result buffers
+    double film_add_seconds = 0;    // the adding thread adding results to the film
+    double backlog_wait_seconds = 0;  // device threads waiting for the adding thread
     void add(const RenderProfile& other) {
         kernel_seconds += other.kernel_seconds;
         transfer_seconds += other.transfer_seconds;
         accumulate_seconds += other.accumulate_seconds;
+        buffers_seconds += other.buffers_seconds;
+        film_add_seconds += other.film_add_seconds;
+        backlog_wait_seconds += other.backlog_wait_seconds;
     }
 };
 
@@ -158,9 +164,10 @@ public:
     // Renders work items [first_item, first_item + item_count) of a pass and returns their
     // values, not yet added to any film (add_to_film), and not counted in stats() but for the
     // profile. cancelled, polled between launches: true abandons the items (the result is then
-    // incomplete and the caller discards it).
+    // incomplete and the caller discards it). reuse: a result whose buffers (grown, not zeroed
+    // where they are large enough) hold the new one (RenderedItemsPool).
     RenderedItems render_items(const PassSpec& pass, int first_item, int item_count,
-                               const std::function<bool()>& cancelled = {});
+                               const std::function<bool()>& cancelled = {}, RenderedItems reuse = {});
 
     const RenderStats& stats() const { return stats_; }
     // Zeroes samples, rays, dropped samples, profile and build time (the kernel flags and cache
@@ -206,8 +213,7 @@ private:
         std::vector<int> dropped;
         uint64_t rays = 0;
     };
-    void collect(RenderedItems& out, const PassSpec& pass, const LaunchSlot& slot, int first_item,
-                 int item_count) const;
+    void collect(RenderedItems& out, const PassSpec& pass, const LaunchSlot& slot, int first_item, int item_count);
     // Items [begin, end) of a launch: camera values to camera_dst (indexed by launch item), the
     // rest to `range`.
     void collect_range(CollectedRange& range, float* camera_dst, float* rays_dst, const LaunchSlot& slot, int begin,
@@ -230,6 +236,8 @@ private:
     int launches_ = 0;
     int local_size_ = 0;  // 0 = the driver's choice
     int collect_threads_ = 1;
+    // The collecting threads' ranges, kept so that their splat lists' memory is reused.
+    std::vector<CollectedRange> ranges_;
     int zsobol_log2_spp_ = 0, zsobol_base4_digits_ = 0;
     int splat_slots_ = 0;
     int strategy_slots_ = 0;

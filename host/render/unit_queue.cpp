@@ -110,7 +110,9 @@ std::optional<UnitQueue::Grab> UnitQueue::take(int worker) {
     for (;;) {
         if (aborted_) return leave();
         if (ready_backlog() >= kMaxReadyBacklog) {
+            const Clock::time_point wait_start = Clock::now();
             changed_.wait(lock);
+            backlog_wait_seconds_ += std::chrono::duration<double>(Clock::now() - wait_start).count();
             continue;
         }
         const Clock::time_point now = Clock::now();
@@ -184,15 +186,19 @@ void UnitQueue::add_results() {
             finished_.erase(it);
         }
         // Outside mutex_, so workers go on meanwhile: this thread alone touches the film.
+        const Clock::time_point add_start = Clock::now();
         ItemCounts counts;
-        for (const RenderedItems& r : f.results) {
+        for (RenderedItems& r : f.results) {
             // A GPU's runs are millions of items, added by several threads (the film's sums
             // are memory-bound); a CPU device's far fewer, by this one.
             const int threads = std::clamp(r.item_count / kMinItemsPerAddThread, 1, max_add_threads_);
             add_to_film(*film_, r, threads);
             counts.add(r.counts);
+            if (pool_) pool_->give(std::move(r));
         }
+        const double add_seconds = std::chrono::duration<double>(Clock::now() - add_start).count();
         std::lock_guard<std::mutex> lock(mutex_);
+        film_add_seconds_ += add_seconds;
         added_end_ = f.end;
         counts_.add(counts);
         film_->spp = units_.first_pass + int(added_end_ / units_.units_per_pass);
@@ -274,6 +280,16 @@ std::vector<UnitQueue::WorkerShare> UnitQueue::shares() {
 ItemCounts UnitQueue::counts() {
     std::lock_guard<std::mutex> lock(mutex_);
     return counts_;
+}
+
+double UnitQueue::film_add_seconds() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return film_add_seconds_;
+}
+
+double UnitQueue::backlog_wait_seconds() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return backlog_wait_seconds_;
 }
 
 double UnitQueue::first_pass_seconds() {

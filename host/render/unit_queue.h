@@ -27,6 +27,7 @@
 
 #include "film/film.h"
 #include "film/rendered_items.h"
+#include "film/rendered_items_pool.h"
 #include "render/work_units.h"
 
 namespace clbdpt {
@@ -85,7 +86,12 @@ public:
 
     int passes_done();  // passes added to the film so far (beyond units.first_pass)
     std::vector<WorkerShare> shares();
+    // Results are handed back to `pool` once added (null: freed).
+    void set_result_pool(RenderedItemsPool* pool) { pool_ = pool; }
     ItemCounts counts();          // of the results added to the film
+    // Seconds the adding thread spent adding, and the workers waiting for it (--profile).
+    double film_add_seconds();
+    double backlog_wait_seconds();
     double first_pass_seconds();  // since start, until the first pass was in the film (0: none yet)
 
 private:
@@ -137,6 +143,9 @@ private:
     std::optional<Film> snapshot_;
     ItemCounts counts_;
     double first_pass_seconds_ = 0;
+    double film_add_seconds_ = 0;
+    RenderedItemsPool* pool_ = nullptr;
+    double backlog_wait_seconds_ = 0;
 
     // A worker waits in take() while this many results wait to be added, so that a device
     // faster than the adding does not pile up results without bound.
