@@ -794,7 +794,8 @@ int main(int argc, char** argv) {
     render->add_option("--local-size", args.local_size, "OpenCL work-group size (default: the driver's choice)")
         ->check(CLI::PositiveNumber);
     render->add_flag("--profile", args.profile,
-                     "Report time per stage (render kernel, read-back, host accumulation) from OpenCL profiling events");
+                     "Report time per stage: render kernel and read-back (OpenCL profiling events), the host's collection, "
+                     "result buffers and film adding, and waits for the adding (clocks)");
     render->add_option("--lookat", args.lookat,
                        "Camera: eye, target and up as 9 numbers (pbrt's LookAt order: ex ey ez tx ty tz ux uy uz)")
         ->expected(9);
