@@ -319,8 +319,9 @@ void Renderer::collect(RenderedItems& out, const PassSpec& pass, const LaunchSlo
     // splat list; the lists are joined in item order, so the result does not depend on it.
     const int min_items = options_.collect_threads > 0 ? 1 : kMinItemsPerCollectThread;  // as asked (tests)
     const int threads = std::min(collect_threads_, std::max(1, item_count / min_items));
-    // The ranges' lists keep their memory from launch to launch (a fresh list's pages, faulted
-    // in for every launch, were most of a GPU's collection time).
+    // The ranges' lists keep their memory from launch to launch, rather than each launch's
+    // threads allocating theirs afresh (on an H200, with reused result buffers too, bdpt's
+    // collection took 24-26 ns a sample against 39: docs/throughput.md, "a third lease").
     ranges_.resize(size_t(threads));
     std::vector<CollectedRange>& ranges = ranges_;
     for (CollectedRange& r : ranges) {
