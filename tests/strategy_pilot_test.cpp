@@ -233,5 +233,20 @@ TEST(StrategyCandidates, RareSharedPixelsAreRareInEveryCameraCandidate) {
     for (bool r : rare_shared_pixels({&black, &black})) EXPECT_FALSE(r);
 }
 
+TEST(StrategyCandidates, CommonSharedVarianceIsTheLeastTermAtRarePixels) {
+    const size_t items = 1000;
+    std::vector<double> pt(items, 0.01), mix(items, 0.02);
+    std::vector<double> shared_tail(items, 0.0);
+    std::vector<bool> rare(items, false);
+    shared_tail[3] = 50.0, shared_tail[4] = 20.0;     // terms every candidate has alike
+    rare[10] = true, pt[10] = 300.0, mix[10] = 60.0;  // a rare path, weighted apart: 60 is common
+    // Per pixel and channel, as the candidates' variances are.
+    EXPECT_DOUBLE_EQ(common_shared_variance(shared_tail, rare, {&pt, &mix}), 130.0 / (3.0 * items));
+    // Nothing shared, or no camera candidate to share it: nothing.
+    EXPECT_EQ(common_shared_variance(std::vector<double>(items, 0.0), std::vector<bool>(items, false), {&pt, &mix}),
+              0.0);
+    EXPECT_EQ(common_shared_variance(shared_tail, rare, {}), 0.0);
+}
+
 }  // namespace
 }  // namespace clbdpt

@@ -412,6 +412,22 @@ std::vector<bool> rare_shared_pixels(const std::vector<const std::vector<double>
     return rare;
 }
 
+double common_shared_variance(const std::vector<double>& shared_tail, const std::vector<bool>& rare_paths,
+                              const std::vector<const std::vector<double>*>& camera_terms) {
+    const size_t items = shared_tail.size();
+    if (camera_terms.empty() || items == 0) return 0.0;
+    double sum = 0;
+    for (size_t item = 0; item < items; ++item) {
+        double shared = shared_tail[item];
+        if (rare_paths[item]) {
+            shared = (*camera_terms[0])[item];
+            for (const std::vector<double>* terms : camera_terms) shared = std::min(shared, (*terms)[item]);
+        }
+        sum += shared;
+    }
+    return sum / (3.0 * double(items));
+}
+
 StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene, const RenderOptions& options,
                                  int spp, double time_budget, bool adaptive, RenderStats* stats) {
     using Clock = std::chrono::steady_clock;
@@ -484,6 +500,7 @@ StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene
             camera_terms.push_back(&transport[size_t(i)].one_terms);
     const std::vector<double> shared_tail = shared_tail_terms(camera_terms);
     const std::vector<bool> rare_paths = rare_shared_pixels(camera_terms);
+    const double shared_counted = kSharedVarianceCounted * common_shared_variance(shared_tail, rare_paths, camera_terms);
 
     for (int i = 0; i < k; ++i) {
         StrategyCandidate& c = pilot.candidates[size_t(i)];
@@ -509,6 +526,7 @@ StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene
         for (int item = 0; item < items; ++item) own.add(item, own_terms[size_t(item)]);
         const double own_hedge_error = standard_error_without_largest(own_terms, kHedgeLeavesOut);
         c.variance_shared_tail = t.one.mean() - own.mean();
+        if (c.integrator != Integrator::Lt) c.variance_shared_counted = shared_counted;
         c.variance_pixel = pixel_variance(whole, t.one);
         c.seconds_per_pass = seconds[size_t(i)] * full_per_sparse;
         const double n = time_budget > 0 && c.seconds_per_pass > 0 ? std::max(1.0, time_budget / c.seconds_per_pass)
@@ -530,7 +548,7 @@ StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene
         // 1/N (less the shared tail) counts kRiskStandardErrors standard errors high.
         const double risky_transport =
             std::max(0.0, (own.mean() - c.variance_transport_stratified) * c.adaptive_variance_left + light.mean) +
-            kRiskStandardErrors * std::hypot(own_hedge_error, light.standard_error);
+            c.variance_shared_counted + kRiskStandardErrors * std::hypot(own_hedge_error, light.standard_error);
         const double transport_mse = risky_transport / n + c.variance_transport_stratified / (n * n);
         c.predicted_mse = transport_mse + c.variance_pixel / std::pow(n, kPixelVarianceExponent);
         const double seconds = n * c.seconds_per_pass * (1.0 + c.adaptive_extra_share);

@@ -30,7 +30,8 @@
 // candidate with the least error times time (N x seconds per sample, from its fastest pass) is
 // chosen: the inverse of Grittmann et al.'s efficiency. A leaves out the samples that every
 // camera candidate has alike (shared_tail_terms), and the pixels where every camera candidate
-// met the same rare path (rare_shared_pixels), and counts two standard errors high, so that a
+// met the same rare path (rare_shared_pixels), counting a share of their common part for every
+// camera candidate instead (common_shared_variance), and counts two standard errors high, so that a
 // candidate whose fireflies the grid happened to miss is not chosen for them (the standard error
 // without the grid's largest terms, which are in A already). The light image
 // (t = 1) takes no part in the grid's terms: its variance is estimated from the squares of all
@@ -63,8 +64,11 @@ struct StrategyCandidate {
     double variance_transport_stratified = 0;
     // The part of variance_transport from the grid's few pixels where every camera candidate has
     // the same large term (shared_tail_terms) or met the same rare path (rare_shared_pixels):
-    // left out of the prediction (see run_strategy_pilot).
+    // left out of the candidate's own terms (see run_strategy_pilot).
     double variance_shared_tail = 0;
+    // What the prediction counts instead, the same for every camera candidate: a share of the
+    // part common to all (common_shared_variance); 0 for lt.
+    double variance_shared_counted = 0;
     double variance_pixel = 0;
     // With adaptive sampling: the share of the camera image's 1/N transport variance that its
     // extra samples leave, and their number as a share of the render's samples (1 and 0 without).
@@ -150,7 +154,8 @@ bool path_traced_extra_samples(const std::vector<StrategyCandidate>& candidates,
 // candidate is better, yet it flattens the ratios towards the cheapest, and a sparse grid
 // catches a handful of them or none (cornell-specular, pass pairs of three seeds: the BDPT
 // mixes' transport variance 0.028, 0.0083 and 0.023, of which a few such pixels made 0.021 in the
-// first). The prediction leaves them out; a candidate's own fireflies stay in. camera_terms:
+// first). The prediction leaves them out of each candidate's own terms (a share of them counts for
+// all: common_shared_variance); a candidate's own fireflies stay in. camera_terms:
 // each camera candidate's terms, all of one length; with fewer than two candidates, all 0.
 constexpr double kSharedTailShare = 0.01;
 constexpr double kSharedTailTolerance = 0.05;
@@ -172,6 +177,24 @@ std::vector<double> shared_tail_terms(const std::vector<const std::vector<double
 // candidates, none.
 constexpr double kRarePathFactor = 100.0;
 std::vector<bool> rare_shared_pixels(const std::vector<const std::vector<double>*>& camera_terms);
+
+// The variance per sample (per pixel and channel) that every camera candidate has in common at
+// the pixels left out above: at a shared-tail pixel its shared term, at a rare shared pixel the
+// least of the candidates' terms. Left out whole, it is missed: such paths are real variance of
+// every candidate's render, and a part common to all weighs for the cheaper candidates. Counted
+// whole, the grid's lone samples of them mislead (cornell-specular went to pt). Measured
+// (12 seeds' pilots against full renders at 256², 64 spp, seeds 1-3), the variance that every
+// candidate's render had beyond its prediction was 0.0075-0.0079 per sample on cornell-fog, 0.63
+// of the grid's mean shared part there (0.0119), and 0.0017-0.0020 on cornell-specular, 0.23 of
+// its 0.0087. So kSharedVarianceCounted of it counts for every camera candidate. With 0.25,
+// cornell-fog's pilot chose full BDPT (0.66x the mix without inner connections there) in 2 of
+// 36 seeds instead of 7, cornell-specular in 0 of 36 instead of 1 (but once in 12 in a later
+// run, a near tie that pass timings decide), and no other scene's choices changed in 12 seeds;
+// with 0.5, fog-spot went to pt once in 12 and cornell-specular to the mix with half a light
+// subpath more often.
+constexpr double kSharedVarianceCounted = 0.25;
+double common_shared_variance(const std::vector<double>& shared_tail, const std::vector<bool>& rare_paths,
+                              const std::vector<const std::vector<double>*>& camera_terms);
 
 // Renders the pilot of every candidate on `device` (stats gain its samples, rays and build
 // time) and picks the candidate with the least predicted error x time at `spp` samples, or,
