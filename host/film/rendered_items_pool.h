@@ -19,7 +19,6 @@ namespace clbdpt {
 // may wait to be added while a third renders, so a bound of a few results kept almost none.
 class RenderedItemsPool {
 public:
-
     // A result handed back earlier (its buffers hold old values: the taker overwrites or
     // clears them), or an empty one.
     RenderedItems take() {
