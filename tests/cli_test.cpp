@@ -329,6 +329,18 @@ TEST_F(CliTest, AutoChoosesTheStrategyMixByPilot) {
     double best_camera = 0;
     for (const nlohmann::json& c : p["candidates"])
         if (c["name"] != "lt") best_camera = std::max(best_camera, c["efficiency_transport_only"].get<double>());
+    // The shared part counted is one figure for every camera candidate, a share of what each left
+    // out of its own terms; lt's terms were not compared.
+    const double counted = p["candidates"][0]["variance_shared_counted"].get<double>();
+    for (const nlohmann::json& c : p["candidates"]) {
+        if (c["name"] == "lt") {
+            EXPECT_EQ(c["variance_shared_counted"].get<double>(), 0.0) << c.dump();
+            continue;
+        }
+        EXPECT_EQ(c["variance_shared_counted"].get<double>(), counted) << c.dump();
+        EXPECT_GE(counted, 0.0);
+        EXPECT_LE(counted, c["variance_shared_tail"].get<double>() * (1.0 + 1e-9) + 1e-300) << c.dump();
+    }
     std::string best;
     double best_efficiency = -1;
     for (const nlohmann::json& c : p["candidates"]) {

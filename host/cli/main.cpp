@@ -585,6 +585,7 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
                                            {"variance_light_image", c.variance_light_image},
                                            {"variance_transport_stratified", c.variance_transport_stratified},
                                            {"variance_shared_tail", c.variance_shared_tail},
+                                           {"variance_shared_counted", c.variance_shared_counted},
                                            {"variance_pixel", c.variance_pixel},
                                            {"adaptive_variance_left", c.adaptive_variance_left},
                                            {"adaptive_extra_share", c.adaptive_extra_share},
