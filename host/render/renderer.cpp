@@ -323,30 +323,29 @@ void Renderer::collect(RenderedItems& out, const PassSpec& pass, const LaunchSlo
     // threads allocating theirs afresh (on an H200, with reused result buffers too, bdpt's
     // collection took 24-26 ns a sample against 39: docs/throughput.md, "a third lease").
     ranges_.resize(size_t(threads));
-    std::vector<CollectedRange>& ranges = ranges_;
-    for (CollectedRange& r : ranges) {
+    for (CollectedRange& r : ranges_) {
         r.splats.clear();
         r.dropped.clear();
         r.rays = 0;
     }
     if (threads == 1) {
-        ranges[0].splats.swap(out.splats);  // appended to in place
-        collect_range(ranges[0], camera_dst, rays_dst, slot, 0, item_count);
-        ranges[0].splats.swap(out.splats);
+        ranges_[0].splats.swap(out.splats);  // appended to in place
+        collect_range(ranges_[0], camera_dst, rays_dst, slot, 0, item_count);
+        ranges_[0].splats.swap(out.splats);
     } else {
         std::vector<std::thread> workers;
         for (int t = 0; t < threads; ++t) {
             const int begin = int(int64_t(item_count) * t / threads), end = int(int64_t(item_count) * (t + 1) / threads);
             workers.emplace_back(
-                [&, t, begin, end] { collect_range(ranges[size_t(t)], camera_dst, rays_dst, slot, begin, end); });
+                [&, t, begin, end] { collect_range(ranges_[size_t(t)], camera_dst, rays_dst, slot, begin, end); });
         }
         for (std::thread& w : workers) w.join();
         // The lists are joined in item order, each copied by a thread of its own.
         size_t joined = out.splats.size();
-        out.splats.resize(joined + std::accumulate(ranges.begin(), ranges.end(), size_t(0),
+        out.splats.resize(joined + std::accumulate(ranges_.begin(), ranges_.end(), size_t(0),
                                                    [](size_t n, const CollectedRange& r) { return n + r.splats.size(); }));
         workers.clear();
-        for (const CollectedRange& r : ranges) {
+        for (const CollectedRange& r : ranges_) {
             if (!r.splats.empty())
                 workers.emplace_back([&r, dst = out.splats.data() + joined] {
                     std::memcpy(static_cast<void*>(dst), r.splats.data(), sizeof(SplatRecord) * r.splats.size());
@@ -355,7 +354,7 @@ void Renderer::collect(RenderedItems& out, const PassSpec& pass, const LaunchSlo
         }
         for (std::thread& w : workers) w.join();
     }
-    for (const CollectedRange& r : ranges) {
+    for (const CollectedRange& r : ranges_) {
         out.counts.rays += r.rays;
         for (int i : r.dropped) {
             const int run_item = first_item + i;

@@ -414,18 +414,18 @@ std::vector<bool> rare_shared_pixels(const std::vector<const std::vector<double>
 
 double common_shared_variance(const std::vector<double>& shared_tail, const std::vector<bool>& rare_paths,
                               const std::vector<const std::vector<double>*>& camera_terms) {
-    const size_t items = shared_tail.size();
-    if (camera_terms.empty() || items == 0) return 0.0;
-    double sum = 0;
-    for (size_t item = 0; item < items; ++item) {
+    if (camera_terms.empty()) return 0.0;
+    // Per pixel and channel, as the candidates' variances are.
+    GroupedVariance common;
+    for (size_t item = 0; item < shared_tail.size(); ++item) {
         double shared = shared_tail[item];
         if (rare_paths[item]) {
             shared = (*camera_terms[0])[item];
             for (const std::vector<double>* terms : camera_terms) shared = std::min(shared, (*terms)[item]);
         }
-        sum += shared;
+        common.add(int(item), shared);
     }
-    return sum / (3.0 * double(items));
+    return common.mean();
 }
 
 StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene, const RenderOptions& options,
