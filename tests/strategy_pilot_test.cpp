@@ -8,6 +8,7 @@
 #include "render/strategy_pilot.h"
 #include "render_test_util.h"
 #include "shared/types.h"
+#include "test_scenes.h"
 
 namespace clbdpt {
 namespace {
@@ -102,18 +103,78 @@ TEST(StrategyCandidates, LightTracingOnlyInDiffuseScenes) {
         const bool expected = n == "cornell-box" || n == "lamp-ceiling" || n == "point-spot";
         const DeviceScene scene = build_device_scene(load_scene(test::scene_path(n)), 16, 16);
         EXPECT_EQ(light_tracing_is_a_candidate(scene), expected) << n;
-        const std::vector<StrategyCandidate> c = strategy_candidates(light_tracing_is_a_candidate(scene));
-        ASSERT_EQ(c.size(), expected ? 5u : 4u) << n;
-        EXPECT_EQ(c.back().integrator, expected ? Integrator::Lt : Integrator::Pt) << n;
+        // fog-spot's point and spot lights are in its fog (PathTracingWhereItRendersEveryPath).
+        const bool with_pt = n != "fog-spot";
+        EXPECT_EQ(path_tracing_is_a_candidate(scene), with_pt) << n;
+        const std::vector<StrategyCandidate> c = strategy_candidates(scene);
+        ASSERT_EQ(c.size(), 3u + (with_pt ? 1 : 0) + (expected ? 1 : 0)) << n;
+        EXPECT_EQ(c.back().integrator, expected ? Integrator::Lt : (with_pt ? Integrator::Pt : Integrator::Bdpt)) << n;
         for (size_t i = 0; i + 1 < c.size(); ++i) EXPECT_NE(c[i].integrator, Integrator::Lt) << n;
     }
+}
+
+// A path tracer is a candidate only where it renders every path, with a bounded variance: not
+// where a delta light shines on a mirror or glass (the light it brings by way of them is out of
+// a path tracer's reach: its image would lack it), nor with a point or spot light inside a medium
+// (unbounded variance near the light). An area light or an environment seen through glass is
+// hit by camera paths, so pt renders it; a delta light with only diffuse and glossy surfaces is
+// reached by light samples.
+TEST(StrategyCandidates, PathTracingWhereItRendersEveryPath) {
+    using namespace test;
+    auto room = [](bool with_mirror, bool with_glass) {
+        SceneBuilder b;
+        RoomMaterials m = room_materials(b);
+        room_walls(b, m);
+        room_camera(b);
+        if (with_mirror) b.quad({-0.9f, 0.2f, 0.9f}, {-0.5f, 0.2f, 0.9f}, {-0.5f, 0.6f, 0.9f}, {-0.9f, 0.6f, 0.9f},
+                                b.material(mirror_material({0.9f, 0.9f, 0.9f}), "mirror"));
+        if (with_glass) b.sphere({0.5f, 0.3f, 0.4f}, 0.25f, 2, false, b.material(glass_material(1.5f), "glass"));
+        return b;
+    };
+    auto with_light = [](SceneBuilder b, LightDesc::Kind kind) {
+        LightDesc l;
+        l.kind = kind;
+        l.position = {0.2f, 1.8f, 0.1f};
+        l.target = {0.2f, 0.0f, 0.1f};
+        l.direction = {0.1f, -1.0f, 0.2f};
+        l.color = {2, 2, 2};
+        if (kind == LightDesc::Kind::Environment) add_environment(b.scene, {1, 1, 1});
+        else b.scene.lights.push_back(l);
+        return b;
+    };
+    auto shortfall = [](const SceneBuilder& b) { return path_tracing_shortfall(build_device_scene(b.scene, 16, 16)); };
+    using K = LightDesc::Kind;
+    for (K kind : {K::Point, K::Spot, K::Directional}) {
+        const int k = int(kind);
+        EXPECT_EQ(shortfall(with_light(room(false, false), kind)), "") << k << ": diffuse surfaces only";
+        for (auto [mirror, glass] : {std::pair{true, false}, std::pair{false, true}}) {
+            const SceneBuilder b = with_light(room(mirror, glass), kind);
+            const DeviceScene scene = build_device_scene(b.scene, 16, 16);
+            EXPECT_TRUE(path_tracing_misses_light(scene)) << k;
+            EXPECT_NE(path_tracing_shortfall(scene).find("mirror or glass"), std::string::npos) << k;
+            EXPECT_FALSE(path_tracing_is_a_candidate(scene)) << k;
+            for (const StrategyCandidate& c : strategy_candidates(scene)) EXPECT_NE(c.integrator, Integrator::Pt) << k;
+        }
+    }
+    // An area light (the room's ceiling light) and an environment: camera paths hit them.
+    SceneBuilder area = room(true, true);
+    ceiling_light(area, {0, 1.999f, 0.2f}, 0.5f, area.material(diffuse_material({0, 0, 0}, {10, 10, 10}), "lamp"));
+    EXPECT_EQ(shortfall(area), "");
+    EXPECT_EQ(shortfall(with_light(room(true, true), K::Environment)), "");
+    // A point light in fog: no mirror needed.
+    SceneBuilder fog = with_light(room(false, false), K::Point);
+    fill_with(fog.scene, add_medium(fog.scene, "fog", {0.01f, 0.01f, 0.01f}, {0.1f, 0.1f, 0.1f}, 0.0f));
+    const DeviceScene foggy = build_device_scene(fog.scene, 16, 16);
+    EXPECT_FALSE(path_tracing_misses_light(foggy)) << "every path is there, only its variance is unbounded";
+    EXPECT_NE(path_tracing_shortfall(foggy).find("inside a medium"), std::string::npos);
+    EXPECT_EQ(strategy_candidates(foggy).size(), 3u);
 }
 
 // The highest efficiency wins; light tracing only where it also beats every other candidate's
 // efficiency without v_pixel (the most that stratified samples and adaptive sampling might
 // credit a camera candidate with).
 TEST(StrategyCandidates, LightTracingMustBeatTheOthersTransportAlone) {
-    std::vector<StrategyCandidate> c = strategy_candidates(true);
+    std::vector<StrategyCandidate> c = strategy_candidates(true, true);
     auto set = [&](size_t i, double efficiency, double transport_only) {
         c[i].efficiency = efficiency;
         c[i].efficiency_transport_only = transport_only;
@@ -139,14 +200,14 @@ TEST(StrategyCandidates, LightTracingMustBeatTheOthersTransportAlone) {
     EXPECT_EQ(light_tracing_passed_over(c, 3), "") << "lt below the chosen candidate's own efficiency";
     set(4, 0, 0);
     EXPECT_EQ(choose_strategy_candidate(c), 3);
-    std::vector<StrategyCandidate> black = strategy_candidates(false);
+    std::vector<StrategyCandidate> black = strategy_candidates(true, false);
     EXPECT_EQ(choose_strategy_candidate(black), 0) << "a black image: full bdpt";
 }
 
 // Adaptive sampling's extra samples are path-traced only for a chosen bdpt mix, without the (1,1)
 // strategy, and where pt's efficiency is at least kPathTracedExtrasMinShare of the mix's.
 TEST(StrategyCandidates, PathTracedExtraSamplesWherePtIsClose) {
-    std::vector<StrategyCandidate> c = strategy_candidates(false);
+    std::vector<StrategyCandidate> c = strategy_candidates(true, false);
     for (size_t i = 0; i < c.size(); ++i) c[i].efficiency = 100;
     c[2].efficiency = 120;  // bdpt without inner connections, chosen
     c[3].efficiency = 0.85 * 120;  // pt (veach-mis, seed 1)
@@ -160,9 +221,12 @@ TEST(StrategyCandidates, PathTracedExtraSamplesWherePtIsClose) {
     EXPECT_FALSE(path_traced_extra_samples(c, 2, false)) << "pt too far behind the mix";
     c[3].efficiency = 200;
     EXPECT_FALSE(path_traced_extra_samples(c, 3, false)) << "pt chosen: its own extra samples";
-    std::vector<StrategyCandidate> with_lt = strategy_candidates(true);
+    std::vector<StrategyCandidate> with_lt = strategy_candidates(true, true);
     for (StrategyCandidate& x : with_lt) x.efficiency = 100;
     EXPECT_FALSE(path_traced_extra_samples(with_lt, 4, false)) << "lt chosen: it has no camera image to refine";
+    std::vector<StrategyCandidate> without_pt = strategy_candidates(false, false);
+    for (StrategyCandidate& x : without_pt) x.efficiency = 100;
+    EXPECT_FALSE(path_traced_extra_samples(without_pt, 2, false)) << "pt is no candidate: it cannot take them either";
 }
 
 // The same large sample in every camera candidate is left out of the prediction; a candidate's

@@ -201,7 +201,7 @@ std::string choose_strategy_mix(DeviceContext& device, const DeviceScene& ds, Re
     const int width = ds.camera.width, height = ds.camera.height;
     const bool timed = options->time_budget > 0;
     if (options->strategy_images != RenderOptions::StrategyImages::Off) return "bdpt: no pilot with --strategy-images";
-    const size_t candidates = strategy_candidates(light_tracing_is_a_candidate(ds)).size();
+    const size_t candidates = strategy_candidates(ds).size();
     if (timed ? options->time_budget < kPilotMinBudget : !strategy_pilot_fits(width, height, options->spp, candidates))
         return "bdpt: too few samples for the pilot to pay off";
     *pilot = run_strategy_pilot(device, ds, *options, timed ? 0 : options->spp, options->time_budget, adaptive,
@@ -223,8 +223,11 @@ std::string choose_strategy_mix(DeviceContext& device, const DeviceScene& ds, Re
     else
         std::snprintf(buf, sizeof buf, "chosen by a pilot of %.2f s (%.0f%% of the render's samples)", pilot->seconds,
                       100.0 * double(pilot->samples) / (double(width) * height * std::max(options->spp, 1)));
+    std::string note = buf;
+    const std::string pt_shortfall = path_tracing_shortfall(ds);
+    if (!pt_shortfall.empty()) note += "; pt left out: " + pt_shortfall;
     const std::string passed_over = light_tracing_passed_over(pilot->candidates, pilot->chosen);
-    return passed_over.empty() ? std::string(buf) : std::string(buf) + "; " + passed_over;
+    return passed_over.empty() ? note : note + "; " + passed_over;
 }
 
 // The settings besides the scene that change the image, as one line of key=value pairs: a
@@ -346,8 +349,13 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
     const Clock::time_point device_scene_start = Clock::now();
     DeviceScene ds = build_device_scene(scene, width, height);
     const double device_scene_seconds = seconds_since(device_scene_start);
-    if (leader)
+    if (leader) {
         for (const std::string& w : ds.warnings) std::fprintf(stderr, "clbdpt: warning: %s\n", w.c_str());
+        // The default leaves pt out of such scenes itself (render/strategy_pilot.h).
+        if (!automatic && options.integrator == Integrator::Pt && path_tracing_misses_light(ds))
+            std::fprintf(stderr, "clbdpt: warning: --integrator pt: %s; its image lacks that light (bdpt renders it)\n",
+                         path_tracing_shortfall(ds).c_str());
+    }
     if (scene.camera_is_automatic) {
         const AutomaticView view = choose_automatic_view(scene.camera, scene.bounds, ds);
         if (view.moved_inside) {

@@ -298,23 +298,54 @@ bool light_tracing_is_a_candidate(const DeviceScene& scene) {
     return true;
 }
 
-std::vector<StrategyCandidate> strategy_candidates(bool with_light_tracing) {
+namespace {
+
+bool is_delta_light(const Light& l) {
+    return l.kind == LIGHT_POINT || l.kind == LIGHT_SPOT || l.kind == LIGHT_DIRECTIONAL;
+}
+
+}  // namespace
+
+bool path_tracing_misses_light(const DeviceScene& scene) {
+    if (std::none_of(scene.lights.begin(), scene.lights.end(), is_delta_light)) return false;
+    return std::any_of(scene.materials.begin(), scene.materials.end(), [](const Material& m) {
+        return m.kind == MATERIAL_MIRROR || m.kind == MATERIAL_GLASS;
+    });
+}
+
+std::string path_tracing_shortfall(const DeviceScene& scene) {
+    if (path_tracing_misses_light(scene))
+        return "it cannot render light from point, spot or directional lights by way of mirror or glass";
+    for (const Light& l : scene.lights)
+        if ((l.kind == LIGHT_POINT || l.kind == LIGHT_SPOT) && l.medium != 0)
+            return "its variance near a point or spot light inside a medium is unbounded";
+    return "";
+}
+
+bool path_tracing_is_a_candidate(const DeviceScene& scene) { return path_tracing_shortfall(scene).empty(); }
+
+std::vector<StrategyCandidate> strategy_candidates(bool with_path_tracing, bool with_light_tracing) {
     // Full bdpt; half the light subpaths (they cost as much as the camera subpath but pay off
     // only where light arrives indirectly); path tracing plus light tracing (caustics seen
-    // directly, without the connections' cost); path tracing alone, with its own leaner kernel;
-    // and, where light_tracing_is_a_candidate, light tracing alone, as lean (a lamp aimed at the
-    // ceiling: 1.4x bdpt's efficiency, whose camera subpaths and connections add little there).
+    // directly, without the connections' cost); path tracing alone, with its own leaner kernel,
+    // where path_tracing_is_a_candidate; and, where light_tracing_is_a_candidate, light tracing
+    // alone, as lean (a lamp aimed at the ceiling: 1.4x bdpt's efficiency, whose camera subpaths
+    // and connections add little there).
     // (A quarter of the light subpaths was a candidate too; it won on none of the bundled
     // scenes, so its pilot time is saved.)
-    std::vector<StrategyCandidate> c(with_light_tracing ? 5 : 4);
+    std::vector<StrategyCandidate> c(3);
     c[0].light_subpaths = 1.0f;
     c[1].light_subpaths = 0.5f;
     c[2].light_subpaths = 1.0f;
     c[2].inner_connections = false;
-    c[3].integrator = Integrator::Pt;
-    if (with_light_tracing) c[4].integrator = Integrator::Lt;
+    if (with_path_tracing) c.emplace_back().integrator = Integrator::Pt;
+    if (with_light_tracing) c.emplace_back().integrator = Integrator::Lt;
     for (StrategyCandidate& s : c) s.name = describe_strategy_mix(s.integrator, s.light_subpaths, s.inner_connections);
     return c;
+}
+
+std::vector<StrategyCandidate> strategy_candidates(const DeviceScene& scene) {
+    return strategy_candidates(path_tracing_is_a_candidate(scene), light_tracing_is_a_candidate(scene));
 }
 
 std::string describe_strategy_mix(Integrator integrator, float light_subpaths, bool inner_connections) {
@@ -432,7 +463,7 @@ StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene
                                  int spp, double time_budget, bool adaptive, RenderStats* stats) {
     using Clock = std::chrono::steady_clock;
     StrategyPilot pilot;
-    pilot.candidates = strategy_candidates(light_tracing_is_a_candidate(scene));
+    pilot.candidates = strategy_candidates(scene);
     pilot.spp = spp;
     const int k = int(pilot.candidates.size());
     const int width = scene.camera.width, height = scene.camera.height;
