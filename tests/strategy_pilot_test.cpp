@@ -91,6 +91,14 @@ TEST(SparseGrid, TimedPilotGridFollowsTheBudget) {
     EXPECT_EQ(timed_pilot_stride(32, 32, 1.5), 1);    // a film of 1024 pixels: all of it
 }
 
+// Every bdpt mix, with or without pt and lt.
+CandidateScope scope_with(bool path_tracing, bool light_tracing) {
+    CandidateScope scope;
+    scope.path_tracing = path_tracing;
+    scope.light_tracing = light_tracing;
+    return scope;
+}
+
 // Light tracing is a candidate where it renders every path and has no tails a sparse pilot
 // misses: diffuse materials only, no environment, no medium. Among the bundled scenes that is
 // the Cornell box, lamp-ceiling and point-spot; the others have a mirror or glass
@@ -105,7 +113,8 @@ TEST(StrategyCandidates, LightTracingOnlyInDiffuseScenes) {
         EXPECT_EQ(light_tracing_is_a_candidate(scene), expected) << n;
         // fog-spot's point and spot lights are in its fog (PathTracingWhereItRendersEveryPath).
         const bool with_pt = n != "fog-spot";
-        EXPECT_EQ(path_tracing_is_a_candidate(scene), with_pt) << n;
+        EXPECT_EQ(candidate_scope(scene).path_tracing, with_pt) << n;
+        EXPECT_TRUE(candidate_scope(scene).without_inner_connections) << n << ": no delta light meets a mirror";
         const std::vector<StrategyCandidate> c = strategy_candidates(scene);
         ASSERT_EQ(c.size(), 3u + (with_pt ? 1 : 0) + (expected ? 1 : 0)) << n;
         EXPECT_EQ(c.back().integrator, expected ? Integrator::Lt : (with_pt ? Integrator::Pt : Integrator::Bdpt)) << n;
@@ -115,10 +124,11 @@ TEST(StrategyCandidates, LightTracingOnlyInDiffuseScenes) {
 
 // A path tracer is a candidate only where it renders every path, with a bounded variance: not
 // where a delta light shines on a mirror or glass (the light it brings by way of them is out of
-// a path tracer's reach: its image would lack it), nor with a point or spot light inside a medium
-// (unbounded variance near the light). An area light or an environment seen through glass is
-// hit by camera paths, so pt renders it; a delta light with only diffuse and glossy surfaces is
-// reached by light samples.
+// a path tracer's reach: its image would lack it; bdpt without inner connections misses that
+// light where it is seen by way of a mirror or glass, so it is left out too), nor with a point or
+// spot light inside a medium (unbounded variance near the light). An area light or an
+// environment seen through glass is hit by camera paths, so pt renders it; a delta light with
+// only diffuse and glossy surfaces is reached by light samples.
 TEST(StrategyCandidates, PathTracingWhereItRendersEveryPath) {
     using namespace test;
     auto room = [](bool with_mirror, bool with_glass) {
@@ -142,39 +152,55 @@ TEST(StrategyCandidates, PathTracingWhereItRendersEveryPath) {
         else b.scene.lights.push_back(l);
         return b;
     };
-    auto shortfall = [](const SceneBuilder& b) { return path_tracing_shortfall(build_device_scene(b.scene, 16, 16)); };
+    auto names = [](const DeviceScene& scene) {
+        std::string all;
+        for (const StrategyCandidate& c : strategy_candidates(scene)) all += c.name + "; ";
+        return all;
+    };
+    const std::string every_mix = "bdpt, 1 light subpath per sample; bdpt, 0.5 light subpaths per sample; "
+                                  "bdpt, 1 light subpath per sample, no inner connections; ";
     using K = LightDesc::Kind;
     for (K kind : {K::Point, K::Spot, K::Directional}) {
         const int k = int(kind);
-        EXPECT_EQ(shortfall(with_light(room(false, false), kind)), "") << k << ": diffuse surfaces only";
+        const DeviceScene diffuse = build_device_scene(with_light(room(false, false), kind).scene, 16, 16);
+        EXPECT_FALSE(delta_light_meets_specular(diffuse)) << k;
+        EXPECT_EQ(path_tracing_shortfall(diffuse), "") << k;
+        EXPECT_EQ(candidates_left_out(diffuse), "") << k;
+        EXPECT_EQ(names(diffuse), every_mix + "pt; lt; ") << k << ": diffuse surfaces only";
         for (auto [mirror, glass] : {std::pair{true, false}, std::pair{false, true}}) {
-            const SceneBuilder b = with_light(room(mirror, glass), kind);
-            const DeviceScene scene = build_device_scene(b.scene, 16, 16);
-            EXPECT_TRUE(path_tracing_misses_light(scene)) << k;
+            const DeviceScene scene = build_device_scene(with_light(room(mirror, glass), kind).scene, 16, 16);
+            EXPECT_TRUE(delta_light_meets_specular(scene)) << k;
             EXPECT_NE(path_tracing_shortfall(scene).find("mirror or glass"), std::string::npos) << k;
-            EXPECT_FALSE(path_tracing_is_a_candidate(scene)) << k;
-            for (const StrategyCandidate& c : strategy_candidates(scene)) EXPECT_NE(c.integrator, Integrator::Pt) << k;
+            EXPECT_NE(candidates_left_out(scene).find("pt and bdpt without inner connections left out"),
+                      std::string::npos)
+                << k;
+            EXPECT_EQ(names(scene), "bdpt, 1 light subpath per sample; bdpt, 0.5 light subpaths per sample; ") << k;
         }
     }
     // An area light (the room's ceiling light) and an environment: camera paths hit them.
     SceneBuilder area = room(true, true);
     ceiling_light(area, {0, 1.999f, 0.2f}, 0.5f, area.material(diffuse_material({0, 0, 0}, {10, 10, 10}), "lamp"));
-    EXPECT_EQ(shortfall(area), "");
-    EXPECT_EQ(shortfall(with_light(room(true, true), K::Environment)), "");
-    // A point light in fog: no mirror needed.
+    const DeviceScene lamp = build_device_scene(area.scene, 16, 16);
+    EXPECT_EQ(path_tracing_shortfall(lamp), "");
+    EXPECT_EQ(names(lamp), every_mix + "pt; ");
+    const DeviceScene sky = build_device_scene(with_light(room(true, true), K::Environment).scene, 16, 16);
+    EXPECT_EQ(path_tracing_shortfall(sky), "");
+    EXPECT_EQ(names(sky), every_mix + "pt; ");
+    // A point light in fog: every path is there, only pt's variance is unbounded.
     SceneBuilder fog = with_light(room(false, false), K::Point);
     fill_with(fog.scene, add_medium(fog.scene, "fog", {0.01f, 0.01f, 0.01f}, {0.1f, 0.1f, 0.1f}, 0.0f));
     const DeviceScene foggy = build_device_scene(fog.scene, 16, 16);
-    EXPECT_FALSE(path_tracing_misses_light(foggy)) << "every path is there, only its variance is unbounded";
+    EXPECT_FALSE(delta_light_meets_specular(foggy));
     EXPECT_NE(path_tracing_shortfall(foggy).find("inside a medium"), std::string::npos);
-    EXPECT_EQ(strategy_candidates(foggy).size(), 3u);
+    EXPECT_EQ(candidates_left_out(foggy), "pt left out: " + path_tracing_shortfall(foggy));
+    EXPECT_EQ(names(foggy), every_mix);
 }
 
 // The highest efficiency wins; light tracing only where it also beats every other candidate's
 // efficiency without v_pixel (the most that stratified samples and adaptive sampling might
 // credit a camera candidate with).
 TEST(StrategyCandidates, LightTracingMustBeatTheOthersTransportAlone) {
-    std::vector<StrategyCandidate> c = strategy_candidates(true, true);
+    std::vector<StrategyCandidate> c = strategy_candidates(scope_with(true, true));
     auto set = [&](size_t i, double efficiency, double transport_only) {
         c[i].efficiency = efficiency;
         c[i].efficiency_transport_only = transport_only;
@@ -200,14 +226,14 @@ TEST(StrategyCandidates, LightTracingMustBeatTheOthersTransportAlone) {
     EXPECT_EQ(light_tracing_passed_over(c, 3), "") << "lt below the chosen candidate's own efficiency";
     set(4, 0, 0);
     EXPECT_EQ(choose_strategy_candidate(c), 3);
-    std::vector<StrategyCandidate> black = strategy_candidates(true, false);
+    std::vector<StrategyCandidate> black = strategy_candidates(scope_with(true, false));
     EXPECT_EQ(choose_strategy_candidate(black), 0) << "a black image: full bdpt";
 }
 
 // Adaptive sampling's extra samples are path-traced only for a chosen bdpt mix, without the (1,1)
 // strategy, and where pt's efficiency is at least kPathTracedExtrasMinShare of the mix's.
 TEST(StrategyCandidates, PathTracedExtraSamplesWherePtIsClose) {
-    std::vector<StrategyCandidate> c = strategy_candidates(true, false);
+    std::vector<StrategyCandidate> c = strategy_candidates(scope_with(true, false));
     for (size_t i = 0; i < c.size(); ++i) c[i].efficiency = 100;
     c[2].efficiency = 120;  // bdpt without inner connections, chosen
     c[3].efficiency = 0.85 * 120;  // pt (veach-mis, seed 1)
@@ -221,10 +247,10 @@ TEST(StrategyCandidates, PathTracedExtraSamplesWherePtIsClose) {
     EXPECT_FALSE(path_traced_extra_samples(c, 2, false)) << "pt too far behind the mix";
     c[3].efficiency = 200;
     EXPECT_FALSE(path_traced_extra_samples(c, 3, false)) << "pt chosen: its own extra samples";
-    std::vector<StrategyCandidate> with_lt = strategy_candidates(true, true);
+    std::vector<StrategyCandidate> with_lt = strategy_candidates(scope_with(true, true));
     for (StrategyCandidate& x : with_lt) x.efficiency = 100;
     EXPECT_FALSE(path_traced_extra_samples(with_lt, 4, false)) << "lt chosen: it has no camera image to refine";
-    std::vector<StrategyCandidate> without_pt = strategy_candidates(false, false);
+    std::vector<StrategyCandidate> without_pt = strategy_candidates(scope_with(false, false));
     for (StrategyCandidate& x : without_pt) x.efficiency = 100;
     EXPECT_FALSE(path_traced_extra_samples(without_pt, 2, false)) << "pt is no candidate: it cannot take them either";
 }

@@ -224,8 +224,8 @@ std::string choose_strategy_mix(DeviceContext& device, const DeviceScene& ds, Re
         std::snprintf(buf, sizeof buf, "chosen by a pilot of %.2f s (%.0f%% of the render's samples)", pilot->seconds,
                       100.0 * double(pilot->samples) / (double(width) * height * std::max(options->spp, 1)));
     std::string note = buf;
-    const std::string pt_shortfall = path_tracing_shortfall(ds);
-    if (!pt_shortfall.empty()) note += "; pt left out: " + pt_shortfall;
+    const std::string left_out = candidates_left_out(ds);
+    if (!left_out.empty()) note += "; " + left_out;
     const std::string passed_over = light_tracing_passed_over(pilot->candidates, pilot->chosen);
     return passed_over.empty() ? note : note + "; " + passed_over;
 }
@@ -351,10 +351,15 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
     const double device_scene_seconds = seconds_since(device_scene_start);
     if (leader) {
         for (const std::string& w : ds.warnings) std::fprintf(stderr, "clbdpt: warning: %s\n", w.c_str());
-        // The default leaves pt out of such scenes itself (render/strategy_pilot.h).
-        if (!automatic && options.integrator == Integrator::Pt && path_tracing_misses_light(ds))
+        // The default leaves these out of such scenes itself (render/strategy_pilot.h).
+        if (!automatic && options.integrator == Integrator::Pt && delta_light_meets_specular(ds))
             std::fprintf(stderr, "clbdpt: warning: --integrator pt: %s; its image lacks that light (bdpt renders it)\n",
                          path_tracing_shortfall(ds).c_str());
+        if (options.integrator == Integrator::Bdpt && !options.inner_connections && delta_light_meets_specular(ds))
+            std::fprintf(stderr,
+                         "clbdpt: warning: --connections off: bdpt without inner connections cannot render light from "
+                         "point, spot or directional lights by way of mirror or glass where it is seen by way of mirror "
+                         "or glass; its image lacks that light\n");
     }
     if (scene.camera_is_automatic) {
         const AutomaticView view = choose_automatic_view(scene.camera, scene.bounds, ds);

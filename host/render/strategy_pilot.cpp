@@ -298,23 +298,17 @@ bool light_tracing_is_a_candidate(const DeviceScene& scene) {
     return true;
 }
 
-namespace {
-
-bool is_delta_light(const Light& l) {
-    return l.kind == LIGHT_POINT || l.kind == LIGHT_SPOT || l.kind == LIGHT_DIRECTIONAL;
-}
-
-}  // namespace
-
-bool path_tracing_misses_light(const DeviceScene& scene) {
-    if (std::none_of(scene.lights.begin(), scene.lights.end(), is_delta_light)) return false;
-    return std::any_of(scene.materials.begin(), scene.materials.end(), [](const Material& m) {
-        return m.kind == MATERIAL_MIRROR || m.kind == MATERIAL_GLASS;
+bool delta_light_meets_specular(const DeviceScene& scene) {
+    const bool delta_light = std::any_of(scene.lights.begin(), scene.lights.end(), [](const Light& l) {
+        return l.kind == LIGHT_POINT || l.kind == LIGHT_SPOT || l.kind == LIGHT_DIRECTIONAL;
     });
+    return delta_light && std::any_of(scene.materials.begin(), scene.materials.end(), [](const Material& m) {
+               return m.kind == MATERIAL_MIRROR || m.kind == MATERIAL_GLASS;
+           });
 }
 
 std::string path_tracing_shortfall(const DeviceScene& scene) {
-    if (path_tracing_misses_light(scene))
+    if (delta_light_meets_specular(scene))
         return "it cannot render light from point, spot or directional lights by way of mirror or glass";
     for (const Light& l : scene.lights)
         if ((l.kind == LIGHT_POINT || l.kind == LIGHT_SPOT) && l.medium != 0)
@@ -322,30 +316,43 @@ std::string path_tracing_shortfall(const DeviceScene& scene) {
     return "";
 }
 
-bool path_tracing_is_a_candidate(const DeviceScene& scene) { return path_tracing_shortfall(scene).empty(); }
+CandidateScope candidate_scope(const DeviceScene& scene) {
+    CandidateScope scope;
+    scope.without_inner_connections = !delta_light_meets_specular(scene);
+    scope.path_tracing = path_tracing_shortfall(scene).empty();
+    scope.light_tracing = light_tracing_is_a_candidate(scene);
+    return scope;
+}
 
-std::vector<StrategyCandidate> strategy_candidates(bool with_path_tracing, bool with_light_tracing) {
+std::vector<StrategyCandidate> strategy_candidates(const CandidateScope& scope) {
     // Full bdpt; half the light subpaths (they cost as much as the camera subpath but pay off
     // only where light arrives indirectly); path tracing plus light tracing (caustics seen
-    // directly, without the connections' cost); path tracing alone, with its own leaner kernel,
-    // where path_tracing_is_a_candidate; and, where light_tracing_is_a_candidate, light tracing
-    // alone, as lean (a lamp aimed at the ceiling: 1.4x bdpt's efficiency, whose camera subpaths
-    // and connections add little there).
+    // directly, without the connections' cost); path tracing alone, with its own leaner kernel;
+    // and light tracing alone, as lean (a lamp aimed at the ceiling: 1.4x bdpt's efficiency,
+    // whose camera subpaths and connections add little there); the last three where the scene
+    // allows them (candidate_scope).
     // (A quarter of the light subpaths was a candidate too; it won on none of the bundled
     // scenes, so its pilot time is saved.)
-    std::vector<StrategyCandidate> c(3);
+    std::vector<StrategyCandidate> c(2);
     c[0].light_subpaths = 1.0f;
     c[1].light_subpaths = 0.5f;
-    c[2].light_subpaths = 1.0f;
-    c[2].inner_connections = false;
-    if (with_path_tracing) c.emplace_back().integrator = Integrator::Pt;
-    if (with_light_tracing) c.emplace_back().integrator = Integrator::Lt;
+    if (scope.without_inner_connections) c.emplace_back().inner_connections = false;
+    if (scope.path_tracing) c.emplace_back().integrator = Integrator::Pt;
+    if (scope.light_tracing) c.emplace_back().integrator = Integrator::Lt;
     for (StrategyCandidate& s : c) s.name = describe_strategy_mix(s.integrator, s.light_subpaths, s.inner_connections);
     return c;
 }
 
 std::vector<StrategyCandidate> strategy_candidates(const DeviceScene& scene) {
-    return strategy_candidates(path_tracing_is_a_candidate(scene), light_tracing_is_a_candidate(scene));
+    return strategy_candidates(candidate_scope(scene));
+}
+
+std::string candidates_left_out(const DeviceScene& scene) {
+    const std::string pt = path_tracing_shortfall(scene);
+    if (pt.empty()) return "";
+    if (!delta_light_meets_specular(scene)) return "pt left out: " + pt;
+    return "pt and bdpt without inner connections left out: they cannot render light from point, spot or "
+           "directional lights by way of mirror or glass";
 }
 
 std::string describe_strategy_mix(Integrator integrator, float light_subpaths, bool inner_connections) {

@@ -92,28 +92,47 @@ struct StrategyCandidate {
 // no medium (fog-spot: a firefly of 1 680 in a 64-spp image, 125x the default's squared error).
 bool light_tracing_is_a_candidate(const DeviceScene& scene);
 
-// Why a path tracer alone cannot render the scene as it must be rendered, or "" where it can.
-// Its strategies are s = 0 (a camera path that hits an emitter) and s = 1 (a light sampled from
-// the camera path's end), so it cannot make a path whose first vertex after the light scatters
-// through a delta lobe when that light is a delta light (point, spot, directional): light
-// from such a light by way of a mirror or glass (its reflections, its caustics) is missing from
-// its image, which is wrong, not noisy (a point light and a mirror beside the bundled
-// point-spot room: 13% of the image's light, and the pilot chose pt in 3 seeds of 3, since the
-// light it cannot see adds no variance). And a point or spot light inside a medium gives its
-// light samples at medium points near the light a 1/r^2 that makes their variance unbounded
-// where camera rays pass close by: a sparse grid may meet none of those fireflies (fog-spot:
-// pt chosen in 1 seed of 36 at 0.05x the default's efficiency), which the bdpt mixes weight
-// against light tracing's own sample of the same points. Either way pt is neither a candidate
-// nor the taker of adaptive sampling's extra samples (path_traced_extra_samples); --integrator
-// pt says so in a warning where its image would lack light (path_tracing_misses_light).
-std::string path_tracing_shortfall(const DeviceScene& scene);
-bool path_tracing_is_a_candidate(const DeviceScene& scene);
-bool path_tracing_misses_light(const DeviceScene& scene);
+// Whether a point, spot or directional light and a mirror or glass are in the scene. Then light
+// goes from a delta light by way of a delta reflection or refraction, and two candidates cannot
+// make every such path, so their images lack light, which is wrong, not noisy, and their pilot
+// passes show no variance for what they miss:
+// - pt: its strategies are s = 0 (a camera path that hits an emitter: a delta light cannot be hit)
+//   and s = 1 (a light sampled from the camera path's end, which cannot be joined to a delta
+//   lobe), so it misses every path whose first vertex after a delta light is a mirror or glass
+//   (with a mirror beside point-spot's point light: 13% of the image's light, and the pilot
+//   chose pt in 3 seeds of 3);
+// - bdpt without inner connections adds t = 1, which joins the light subpath's last vertex to
+//   the lens: it misses such light where the camera sees it by way of a mirror or glass too
+//   (point light, glass and mirror spheres in cornell-specular's box: some pixels of the spheres
+//   10-20% dark).
+// Neither is then a candidate, nor does pt take adaptive sampling's extra samples
+// (path_traced_extra_samples; they made that scene 0.7% dark), and --integrator pt or
+// --connections off warn.
+bool delta_light_meets_specular(const DeviceScene& scene);
 
-// What the pilot can choose from, in its order: bdpt's mixes, pt where
-// path_tracing_is_a_candidate, and lt where light_tracing_is_a_candidate.
-std::vector<StrategyCandidate> strategy_candidates(bool with_path_tracing, bool with_light_tracing);
+// Why a path tracer alone cannot render the scene as it must be rendered, or "" where it can:
+// delta_light_meets_specular, or a point or spot light inside a medium, which gives light
+// samples at medium points near the light a 1/r^2 that makes their variance unbounded where camera
+// rays pass close by: a sparse grid may meet none of those fireflies (fog-spot: pt chosen in 1
+// seed of 36, at 0.05x the default's efficiency); the bdpt mixes weight them against light
+// tracing's own samples of the same points.
+std::string path_tracing_shortfall(const DeviceScene& scene);
+
+// Which candidates the scene allows besides full bdpt and half its light subpaths.
+struct CandidateScope {
+    bool without_inner_connections = true;  // !delta_light_meets_specular
+    bool path_tracing = true;               // path_tracing_shortfall is ""
+    bool light_tracing = false;             // light_tracing_is_a_candidate
+};
+CandidateScope candidate_scope(const DeviceScene& scene);
+
+// What the pilot can choose from, in its order: full bdpt, half its light subpaths, without inner
+// connections, pt, lt (those the scope allows).
+std::vector<StrategyCandidate> strategy_candidates(const CandidateScope& scope);
 std::vector<StrategyCandidate> strategy_candidates(const DeviceScene& scene);
+
+// The candidates the scene leaves out and why, for the render's summary, or "".
+std::string candidates_left_out(const DeviceScene& scene);
 
 // "bdpt, 0.5 light subpaths per sample, no inner connections", "pt", ...
 std::string describe_strategy_mix(Integrator integrator, float light_subpaths, bool inner_connections);
