@@ -773,9 +773,10 @@ int main(int argc, char** argv) {
     render->add_option("--height", args.height, "Film height override")->check(CLI::Range(1, 32768));
     render->add_option("--stats", args.stats, "Write a JSON summary (spp, seconds, samples/s, rays/s, ...)");
     render->add_option("--integrator", args.integrator,
-                       "auto (default: bdpt, pt or, in a scene of diffuse surfaces without media or environment, lt: "
-                       "whichever strategy mix a short pilot render finds most efficient for the scene), bdpt (all "
-                       "strategies), pt (s <= 1) or lt (t = 1)")
+                       "auto (default: bdpt, pt (not where a point, spot or directional light meets a mirror or "
+                       "glass, nor with a point or spot light in a medium) or, in a scene of diffuse surfaces without "
+                       "media or environment, lt: whichever strategy mix a short pilot render finds most efficient for "
+                       "the scene), bdpt (all strategies), pt (s <= 1) or lt (t = 1)")
         ->check(CLI::IsMember({"auto", "bdpt", "pt", "lt"}));
     render->add_option("--light-subpaths", args.light_subpaths,
                        "bdpt: light subpaths traced per pixel sample, 0 to 1 (a fraction is a probability; MIS "
