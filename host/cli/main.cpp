@@ -352,14 +352,15 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
     if (leader) {
         for (const std::string& w : ds.warnings) std::fprintf(stderr, "clbdpt: warning: %s\n", w.c_str());
         // The default leaves these out of such scenes itself (render/strategy_pilot.h).
-        if (!automatic && options.integrator == Integrator::Pt && delta_light_meets_specular(ds))
-            std::fprintf(stderr, "clbdpt: warning: --integrator pt: %s; its image lacks that light (bdpt renders it)\n",
-                         path_tracing_shortfall(ds).c_str());
+        // (auto has not chosen yet: options hold what the command line fixed.)
+        if (options.integrator == Integrator::Pt && delta_light_meets_specular(ds))
+            std::fprintf(stderr, "clbdpt: warning: --integrator pt: it %s; its image lacks that light (bdpt renders it)\n",
+                         kDeltaLightSpecularShortfall);
         if (options.integrator == Integrator::Bdpt && !options.inner_connections && delta_light_meets_specular(ds))
             std::fprintf(stderr,
-                         "clbdpt: warning: --connections off: bdpt without inner connections cannot render light from "
-                         "point, spot or directional lights by way of mirror or glass where it is seen by way of mirror "
-                         "or glass; its image lacks that light\n");
+                         "clbdpt: warning: --connections off: bdpt without inner connections %s where it is seen by "
+                         "way of mirror or glass; its image lacks that light\n",
+                         kDeltaLightSpecularShortfall);
     }
     if (scene.camera_is_automatic) {
         const AutomaticView view = choose_automatic_view(scene.camera, scene.bounds, ds);

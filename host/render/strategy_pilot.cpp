@@ -308,8 +308,7 @@ bool delta_light_meets_specular(const DeviceScene& scene) {
 }
 
 std::string path_tracing_shortfall(const DeviceScene& scene) {
-    if (delta_light_meets_specular(scene))
-        return "it cannot render light from point, spot or directional lights by way of mirror or glass";
+    if (delta_light_meets_specular(scene)) return std::string("it ") + kDeltaLightSpecularShortfall;
     for (const Light& l : scene.lights)
         if ((l.kind == LIGHT_POINT || l.kind == LIGHT_SPOT) && l.medium != 0)
             return "its variance near a point or spot light inside a medium is unbounded";
@@ -351,8 +350,7 @@ std::string candidates_left_out(const DeviceScene& scene) {
     const std::string pt = path_tracing_shortfall(scene);
     if (pt.empty()) return "";
     if (!delta_light_meets_specular(scene)) return "pt left out: " + pt;
-    return "pt and bdpt without inner connections left out: they cannot render light from point, spot or "
-           "directional lights by way of mirror or glass";
+    return std::string("pt and bdpt without inner connections left out: they ") + kDeltaLightSpecularShortfall;
 }
 
 std::string describe_strategy_mix(Integrator integrator, float light_subpaths, bool inner_connections) {

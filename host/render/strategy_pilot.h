@@ -109,6 +109,9 @@ bool light_tracing_is_a_candidate(const DeviceScene& scene);
 // (path_traced_extra_samples; they made that scene 0.7% dark), and --integrator pt or
 // --connections off warn.
 bool delta_light_meets_specular(const DeviceScene& scene);
+// What such a scene's left-out candidates cannot do, as the summary and the warnings say it.
+constexpr const char* kDeltaLightSpecularShortfall =
+    "cannot render light from point, spot or directional lights by way of mirror or glass";
 
 // Why a path tracer alone cannot render the scene as it must be rendered, or "" where it can:
 // delta_light_meets_specular, or a point or spot light inside a medium, which gives light
