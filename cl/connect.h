@@ -78,17 +78,16 @@ inline float3 connect_bdpt(const SceneData* scene, const StrategyMix* mix, Rng* 
     } else if (s == 1) {
         const PathVertex* pt = &camera_path[t - 1];
         rng_seek(rng, sample_draw_light_connection(t));
-        float u_light = rng_next(rng);
-        float2 u = rng_next2(rng);
+        float2 u = rng_next2(rng); /* u.x picks the light, its rest and u.y the point */
         if (!vertex_is_connectible(scene, pt) || scene->info->light_count == 0) return L;
-        float select_pdf;
+        float select_pdf, u_rest;
 #ifdef NEE_EVERY_LIGHT
-        int light = nee_group_light(scene, nee_group, pt->p, u_light, &select_pdf);
+        int light = nee_group_light(scene, nee_group, pt->p, u.x, &select_pdf, &u_rest);
 #else
-        int light = sample_light_for_point(scene, pt->p, u_light, &select_pdf);
+        int light = sample_light_for_point(scene, pt->p, u.x, &select_pdf, &u_rest);
 #endif
         LightSample ls;
-        if (light >= 0 && light_sample_li(scene, light, pt->p, u, &ls)) {
+        if (light >= 0 && light_sample_li(scene, light, pt->p, (float2)(u_rest, u.y), &ls)) {
             sampled = vertex_at(VERTEX_LIGHT, ls.p, ls.n, ls.p_error);
             sampled.beta = ls.li / (ls.pdf_w * select_pdf);
             sampled.light = light;

@@ -16,9 +16,13 @@
 
 /* ---- Selection ------------------------------------------------------------------------- */
 
-inline int sample_light_index(const SceneData* scene, float u, float* select_pdf) {
-    int i = find_interval(scene->light_cdf, scene->info->light_count, u);
+/* The light that draw u picks by power, its probability, and u's rest for sampling a point on
+ * it (rest_of_choice). */
+inline int sample_light_index(const SceneData* scene, float u, float* select_pdf, float* u_rest) {
+    __global const float* cdf = scene->light_cdf;
+    int i = find_interval(cdf, scene->info->light_count, u);
     *select_pdf = scene->lights[i].select_pdf;
+    *u_rest = rest_of_choice(u, cdf[i], cdf[i + 1]);
     return i;
 }
 
@@ -113,9 +117,9 @@ inline float light_weights_total_at(const SceneData* scene, float3 x) {
 }
 #endif
 
-/* The light a light sample from x picks with draw u, and the probability it had; -1 if no
- * light can reach x. */
-inline int sample_light_for_point(const SceneData* scene, float3 x, float u, float* select_pdf) {
+/* The light a light sample from x picks with draw u, the probability it had, and u's rest
+ * (rest_of_choice); -1 if no light can reach x. */
+inline int sample_light_for_point(const SceneData* scene, float3 x, float u, float* select_pdf, float* u_rest) {
 #ifdef NEE_CONE_AWARE
     float total = light_weights_total_at(scene, x);
     float target = u * total;
@@ -130,9 +134,10 @@ inline int sample_light_for_point(const SceneData* scene, float3 x, float u, flo
         target -= w;
     }
     *select_pdf = chosen >= 0 ? chosen_weight / total : 0.0f;
+    *u_rest = rest_of_choice(target, 0.0f, chosen_weight);
     return chosen;
 #else
-    return sample_light_index(scene, u, select_pdf);
+    return sample_light_index(scene, u, select_pdf, u_rest);
 #endif
 }
 
@@ -164,14 +169,19 @@ inline float nee_light_probability(const SceneData* scene, int i, float3 x) {
     return 1.0f;
 }
 
-/* The light that group g's sample from x takes with draw u_light, and the probability it had
- * (*pick_pdf, the one the MIS weights use); -1 if the group cannot light x. */
-inline int nee_group_light(const SceneData* scene, int g, float3 x, float u_light, float* pick_pdf) {
+/* The light that group g's sample from x takes with draw u_light, the probability it had
+ * (*pick_pdf, the one the MIS weights use) and u_light's rest (rest_of_choice; u_light itself
+ * for a group of one light); -1 if the group cannot light x. */
+inline int nee_group_light(const SceneData* scene, int g, float3 x, float u_light, float* pick_pdf, float* u_rest) {
     int area = scene->info->area_light_count;
     int i;
+    *u_rest = u_light;
     if (area > 0 && g == 0) {
-        float area_total = scene->light_cdf[area];
-        i = area_total > 0.0f ? find_interval(scene->light_cdf, area, u_light * area_total) : 0;
+        __global const float* cdf = scene->light_cdf;
+        float area_total = cdf[area];
+        float target = u_light * area_total;
+        i = area_total > 0.0f ? find_interval(cdf, area, target) : 0;
+        *u_rest = rest_of_choice(target, cdf[i], cdf[i + 1]);
     } else {
         i = area + g - (area > 0 ? 1 : 0);
     }

@@ -86,21 +86,22 @@ inline float3 path_tracer_light_sample(const SceneData* scene, int light, float 
     return L * (1.0f / (1.0f + ratio));
 }
 
-/* The s = 1 strategy samples at the path's vertex v (draws u_light, u): one light sample, or
- * with NEE_EVERY_LIGHT one of each light group (cl/lights.h), each added on its own. */
-inline void path_tracer_light_samples(const SceneData* scene, float u_light, float2 u, const PathVertex* prev,
-                                      const PathVertex* v, const Bsdf* b, int t, PathTracerSum* sum) {
+/* The s = 1 strategy samples at the path's vertex v (draw u: u.x picks the light, its rest and
+ * u.y the point): one light sample, or with NEE_EVERY_LIGHT one of each light group
+ * (cl/lights.h), each added on its own. */
+inline void path_tracer_light_samples(const SceneData* scene, float2 u, const PathVertex* prev, const PathVertex* v,
+                                      const Bsdf* b, int t, PathTracerSum* sum) {
     if (!vertex_is_connectible(scene, v) || scene->info->light_count == 0) return;
-    float select_pdf;
+    float select_pdf, u_rest;
 #ifdef NEE_EVERY_LIGHT
     int groups = nee_group_count(scene);
     for (int g = 0; g < groups; ++g) {
-        int light = nee_group_light(scene, g, v->p, u_light, &select_pdf);
-        path_tracer_add(sum, path_tracer_light_sample(scene, light, select_pdf, u, prev, v, b), 1, t);
+        int light = nee_group_light(scene, g, v->p, u.x, &select_pdf, &u_rest);
+        path_tracer_add(sum, path_tracer_light_sample(scene, light, select_pdf, (float2)(u_rest, u.y), prev, v, b), 1, t);
     }
 #else
-    int light = sample_light_for_point(scene, v->p, u_light, &select_pdf);
-    path_tracer_add(sum, path_tracer_light_sample(scene, light, select_pdf, u, prev, v, b), 1, t);
+    int light = sample_light_for_point(scene, v->p, u.x, &select_pdf, &u_rest);
+    path_tracer_add(sum, path_tracer_light_sample(scene, light, select_pdf, (float2)(u_rest, u.y), prev, v, b), 1, t);
 #endif
 }
 
@@ -144,16 +145,16 @@ inline void path_tracer_sample(const SceneData* scene, Rng* rng, float2 raster, 
         int t = i + 1;
         if (vertex_is_light(&v)) path_tracer_add(sum, path_tracer_emitter_hit(scene, &prev, &v, t), 0, t);
         if (v.type == VERTEX_LIGHT || i == MAX_DEPTH + 1) break;
-        /* The vertex's draws (cl/sample_dimensions.h), all four at once: the light point's
-         * (choice, point) for s = 1 and the bounce's (lobe, direction). */
+        /* The vertex's draws (cl/sample_dimensions.h), all at once: the light sample's (light
+         * and point) for s = 1 and the bounce's (lobe, direction); the fourth lane repeats one. */
         uint light_draw = sample_draw_light_connection(t), bounce_draw = sample_draw_camera_bounce(i - 1);
         float4 ux, uy;
-        rng_draws4(rng, (uint4)(light_draw, light_draw + 1u, bounce_draw, bounce_draw + 1u), &ux, &uy);
+        rng_draws4(rng, (uint4)(light_draw, bounce_draw, bounce_draw + 1u, bounce_draw + 1u), &ux, &uy);
         Bsdf b = vertex_bsdf(scene, &v);
-        path_tracer_light_samples(scene, ux.s0, (float2)(ux.s1, uy.s1), &prev, &v, &b, t, sum);
+        path_tracer_light_samples(scene, (float2)(ux.s0, uy.s0), &prev, &v, &b, t, sum);
 
         BsdfSample bs;
-        if (!bsdf_sample(&b, v.wo, (float3)(ux.s2, ux.s3, uy.s3), TRANSPORT_RADIANCE, &bs) || is_black(bs.f)) break;
+        if (!bsdf_sample(&b, v.wo, (float3)(ux.s1, ux.s2, uy.s2), TRANSPORT_RADIANCE, &bs) || is_black(bs.f)) break;
         pdf_fwd = bs.pdf;
         beta *= bs.f * (fabs(dot(bs.wi, v.ns)) / bs.pdf);
         if (bs.specular) {

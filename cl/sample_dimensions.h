@@ -11,14 +11,17 @@
  *   SAMPLE_DRAW_PIXEL                      position in the pixel (2D)             1
  *   SAMPLE_DRAW_LENS                       camera ray's lens point (2D)           1
  *   SAMPLE_DRAW_TRACE_LIGHT_SUBPATH        whether a light subpath is traced (1D) 1
- *   SAMPLE_DRAW_LIGHT_CHOICE               which light emits (1D)                 1
- *   SAMPLE_DRAW_LIGHT_POSITION             point on it (2D)                       1
+ *   SAMPLE_DRAW_LIGHT_POSITION             which light emits and where (2D)       1
  *   SAMPLE_DRAW_LIGHT_DIRECTION            emitted direction (2D)                 1
  *   sample_draw_camera_bounce(k)           lobe (1D), then direction (2D)         2 per bounce, MAX_DEPTH bounces
  *                                          HAS_MEDIA: then the distance (2D)      3 per bounce, MAX_DEPTH + 1
  *   sample_draw_light_bounce(k)            lobe (1D), then direction (2D)         as the camera's
  *   sample_draw_lens_connection(s)         t = 1: lens point (2D)                 1 per s = 1 .. MAX_DEPTH + 1
- *   sample_draw_light_connection(t)        s = 1: light choice (1D), point (2D)   2 per t = 2 .. MAX_DEPTH + 1
+ *   sample_draw_light_connection(t)        s = 1: light and point on it (2D)      1 per t = 2 .. MAX_DEPTH + 1
+ *
+ * A light's draw is 2D: its first value picks the light (and the triangle of an emitter) and
+ * what is left of it after the pick (rest_of_choice, cl/sampling.h) is the point's first
+ * coordinate, so a pixel's light points stay stratified over every emitter together.
  *
  * A camera subpath has at most MAX_DEPTH + 1 scattering vertices and samples a direction at
  * all but the last; a light subpath has at most MAX_DEPTH and samples at all but the last
@@ -39,9 +42,8 @@
 #define SAMPLE_DRAW_PIXEL 0u
 #define SAMPLE_DRAW_LENS 1u
 #define SAMPLE_DRAW_TRACE_LIGHT_SUBPATH 2u
-#define SAMPLE_DRAW_LIGHT_CHOICE 3u
-#define SAMPLE_DRAW_LIGHT_POSITION 4u
-#define SAMPLE_DRAW_LIGHT_DIRECTION 5u
+#define SAMPLE_DRAW_LIGHT_POSITION 3u
+#define SAMPLE_DRAW_LIGHT_DIRECTION 4u
 #ifdef HAS_MEDIA
 #define SAMPLE_DRAWS_PER_BOUNCE 3u
 #define SAMPLE_DRAW_BOUNCE_DISTANCE 2u /* within a bounce's draws */
@@ -50,11 +52,11 @@
 #define SAMPLE_DRAWS_PER_BOUNCE 2u
 #define SAMPLE_BOUNCE_SLOTS (MAX_DEPTH)
 #endif
-#define SAMPLE_DRAW_CAMERA_BOUNCES 6u
+#define SAMPLE_DRAW_CAMERA_BOUNCES 5u
 #define SAMPLE_DRAW_LIGHT_BOUNCES (SAMPLE_DRAW_CAMERA_BOUNCES + SAMPLE_DRAWS_PER_BOUNCE * SAMPLE_BOUNCE_SLOTS)
 #define SAMPLE_DRAW_LENS_CONNECTIONS (SAMPLE_DRAW_LIGHT_BOUNCES + SAMPLE_DRAWS_PER_BOUNCE * SAMPLE_BOUNCE_SLOTS)
 #define SAMPLE_DRAW_LIGHT_CONNECTIONS (SAMPLE_DRAW_LENS_CONNECTIONS + (MAX_DEPTH) + 1u)
-#define SAMPLE_DRAWS_PER_LIGHT_CONNECTION 2u
+#define SAMPLE_DRAWS_PER_LIGHT_CONNECTION 1u
 #define SAMPLE_DRAW_COUNT (SAMPLE_DRAW_LIGHT_CONNECTIONS + SAMPLE_DRAWS_PER_LIGHT_CONNECTION * (MAX_DEPTH))
 
 /* The first of the draws of a subpath's bounce k (k = 0 at its first scattering vertex). */

@@ -68,4 +68,13 @@ inline int find_interval(__global const float* cdf, int n, float u) {
     return lo;
 }
 
+/* Where u lies within [lo, hi), itself uniform on [0, 1) when u is uniform and falls there: a
+ * discrete choice made with u (one light of several, one triangle of an emitter) hands its rest
+ * to the chosen item's own sampling, so the points of a stratified 2D draw stay stratified over
+ * all the items together instead of each item getting a random subset of them (pbrt-v4's
+ * SampleDiscrete, Mitsuba's mesh emitters). Its resolution is u's float spacing over hi - lo. */
+inline float rest_of_choice(float u, float lo, float hi) {
+    return hi > lo ? fmin((u - lo) / (hi - lo), 0x1.fffffep-1f) : 0.0f;
+}
+
 #endif

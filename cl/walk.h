@@ -230,17 +230,15 @@ inline int generate_camera_subpath(const SceneData* scene, Rng* rng, float2 rast
 
 /* Light subpath: at most max_depth + 1 vertices (the light and max_depth scattering vertices). */
 inline int generate_light_subpath(const SceneData* scene, Rng* rng, int max_depth, PathVertex* path) {
-    rng_seek(rng, SAMPLE_DRAW_LIGHT_CHOICE);
-    float u_light = rng_next(rng);
     rng_seek(rng, SAMPLE_DRAW_LIGHT_POSITION);
-    float2 u_pos = rng_next2(rng);
+    float2 u_pos = rng_next2(rng); /* u_pos.x picks the light, its rest and u_pos.y the point */
     rng_seek(rng, SAMPLE_DRAW_LIGHT_DIRECTION);
     float2 u_dir = rng_next2(rng);
     if (scene->info->light_count == 0) return 0;
-    float select_pdf;
-    int light = sample_light_index(scene, u_light, &select_pdf);
+    float select_pdf, u_rest;
+    int light = sample_light_index(scene, u_pos.x, &select_pdf, &u_rest);
     EmittedRay er;
-    if (!light_sample_le(scene, light, u_pos, u_dir, &er)) return 0;
+    if (!light_sample_le(scene, light, (float2)(u_rest, u_pos.y), u_dir, &er)) return 0;
     int kind = scene->lights[light].kind;
     PathVertex* lv = &path[0];
     *lv = kind == LIGHT_AREA ? vertex_at(VERTEX_LIGHT, er.origin, er.n, er.origin_error)

@@ -16,6 +16,7 @@
 // relative to r): ~100 ulps; radiances copied from the light to 1e-6; chi-square tests at
 // kChiSquareSignificance, Monte Carlo means within kSigmas standard errors (kernel_test_util.h).
 #include <algorithm>
+#include <map>
 
 #include <gtest/gtest.h>
 
@@ -551,6 +552,33 @@ TEST(Lights, InfiniteLightsSampleLeFromTheBoundingDisk) {
     }
 }
 
+// light_scene with a spot among 5 lights, and a medium, which rules out NEE_EVERY_LIGHT, so a
+// light sample from a point chooses its light by NEE_CONE_AWARE (nothing is in the medium).
+const TestScene& cone_aware_scene() {
+    static const TestScene scene = [] {
+        Scene s = light_scene(true);
+        MediumDesc fog;
+        fog.name = "fog";
+        fog.sigma_a = {0.1f, 0.1f, 0.1f};
+        s.media.push_back(fog);
+        return TestScene(s, 32, 32);
+    }();
+    return scene;
+}
+
+// Two area lights of different power, a point and a spot light: 3 light groups, so a light
+// sample is taken of each (NEE_EVERY_LIGHT).
+const TestScene& light_groups_scene() {
+    static const TestScene scene = [] {
+        Scene s = light_scene(false);
+        int dim = add_material(s, make_material(MATERIAL_DIFFUSE, {0, 0, 0}, {}, {1, 1, 2}));
+        add_triangle(s, {-1.6, 1.8, 0.4}, {-0.8, 1.8, 0.5}, {-1.2, 1.9, 1.2}, dim);
+        s.lights.resize(2);  // point, spot
+        return TestScene(s, 32, 32);
+    }();
+    return scene;
+}
+
 // Light selection by power: the index frequencies follow select_pdf (chi-square), the reported
 // probability is the light's select_pdf, and select_pdf is proportional to Light::power.
 TEST(Lights, SelectionFollowsSelectPdf) {
@@ -586,14 +614,7 @@ TEST(Lights, SelectionFollowsSelectPdf) {
 // never where it does not (chi-square on the index frequencies); it reports that probability,
 // and light_sample_selection_ratio is it over select_pdf.
 TEST(Lights, LightSampleSkipsSpotsThatCannotReachThePoint) {
-    static const TestScene scene = [] {
-        Scene s = light_scene(true);
-        MediumDesc fog;
-        fog.name = "fog";
-        fog.sigma_a = {0.1f, 0.1f, 0.1f};
-        s.media.push_back(fog);
-        return TestScene(s, 32, 32);
-    }();
+    const TestScene& scene = cone_aware_scene();
     ASSERT_NE(std::find(scene.defines.begin(), scene.defines.end(), "NEE_CONE_AWARE"), scene.defines.end());
     ASSERT_EQ(std::find(scene.defines.begin(), scene.defines.end(), "NEE_EVERY_LIGHT"), scene.defines.end());
     const std::vector<Light>& lights = scene.ds.lights;
@@ -641,13 +662,7 @@ TEST(Lights, LightSampleSkipsSpotsThatCannotReachThePoint) {
 // the spot, each with probability 1, the spot only inside its cone; each reports its
 // probability, and light_sample_selection_ratio is it over select_pdf.
 TEST(Lights, LightSamplesTakeEveryLightGroup) {
-    static const TestScene scene = [] {
-        Scene s = light_scene(false);
-        int dim = add_material(s, make_material(MATERIAL_DIFFUSE, {0, 0, 0}, {}, {1, 1, 2}));
-        add_triangle(s, {-1.6, 1.8, 0.4}, {-0.8, 1.8, 0.5}, {-1.2, 1.9, 1.2}, dim);
-        s.lights.resize(2);  // point, spot
-        return TestScene(s, 32, 32);
-    }();
+    const TestScene& scene = light_groups_scene();
     const std::vector<std::string>& flags = scene.defines;
     ASSERT_NE(std::find(flags.begin(), flags.end(), "NEE_EVERY_LIGHT"), flags.end());
     ASSERT_EQ(std::find(flags.begin(), flags.end(), "NEE_CONE_AWARE"), flags.end());
@@ -693,6 +708,49 @@ TEST(Lights, LightSamplesTakeEveryLightGroup) {
         }
         expect_fit(obs, {double(n) * lights[0].select_pdf / area_total, double(n) * lights[1].select_pdf / area_total},
                    "area light picks");
+    }
+}
+
+// A light choice hands what is left of its draw to the chosen light's point (rest_of_choice):
+// on n evenly spaced draws, each light's rests are evenly spaced over [0, 1) too, as many in
+// every sixteenth of it within rounding (a count off by at most 2), for the choice by power
+// (light subpaths), the choice from a point (NEE_CONE_AWARE) and the area lights' group
+// (NEE_EVERY_LIGHT). Then a stratified 2D light draw stays stratified over the lights' points
+// together. Handing on the draw itself, as before, puts each light's values in its own
+// interval of the CDF and fails every light's bins but one's.
+TEST(Lights, ChoiceLeavesItsDrawStratifiedForThePoint) {
+    constexpr int kBins = 16;
+    constexpr cl_uint n = 1 << 14;
+    const D3 x = kSpotPos + 2.5 * normalize(kSpotTarget - kSpotPos);  // inside the spot's cone
+    // map_scene has one area light, the only one its group 0 (NEE_EVERY_LIGHT) can pick.
+    const std::pair<const TestScene*, size_t> scenes[] = {{&map_scene(), 1}, {&cone_aware_scene(), 5}, {&light_groups_scene(), 2}};
+    for (const auto& [scene, lights_from_point] : scenes) {
+        cl::Kernel k = scene->kernel("kernels/lights_test.cl", "light_choice_rest_test");
+        k.setArg(SceneBuffers::kSceneArgCount, n);
+        k.setArg(SceneBuffers::kSceneArgCount + 1, cl_float4{{float(x.x), float(x.y), float(x.z), 0.0f}});
+        cl::Buffer out = output_buffer<cl_float4>(n);
+        k.setArg(SceneBuffers::kSceneArgCount + 2, out);
+        launch(k, n);
+        const std::vector<cl_float4> r = download<cl_float4>(out, n);
+        for (int choice : {0, 1}) {
+            std::map<int, std::vector<int>> bins;  // light -> counts per bin of its rests
+            for (const cl_float4& v : r) {
+                const int light = int(v.s[2 * choice]);
+                const float rest = v.s[2 * choice + 1];
+                ASSERT_GE(light, 0);
+                ASSERT_GE(rest, 0.0f);
+                ASSERT_LT(rest, 1.0f);
+                std::vector<int>& b = bins[light];
+                b.resize(kBins);
+                ++b[size_t(std::min(kBins - 1, int(rest * kBins)))];
+            }
+            ASSERT_EQ(bins.size(), choice ? lights_from_point : scene->ds.lights.size()) << "lights picked";
+            for (const auto& [light, counts] : bins) {
+                const auto [lo, hi] = std::minmax_element(counts.begin(), counts.end());
+                EXPECT_LE(*hi - *lo, 2) << (choice ? "choice from a point" : "choice by power") << ", light " << light
+                                        << ": rests per bin from " << *lo << " to " << *hi;
+            }
+        }
     }
 }
 

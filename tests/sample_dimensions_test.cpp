@@ -38,8 +38,7 @@ std::vector<Decision> decisions() {
     std::vector<Decision> v = {{"pixel", SAMPLE_DRAW_PIXEL},
                                {"lens", SAMPLE_DRAW_LENS},
                                {"trace light subpath", SAMPLE_DRAW_TRACE_LIGHT_SUBPATH},
-                               {"light choice", SAMPLE_DRAW_LIGHT_CHOICE},
-                               {"light position", SAMPLE_DRAW_LIGHT_POSITION},
+                               {"light and its point", SAMPLE_DRAW_LIGHT_POSITION},
                                {"light direction", SAMPLE_DRAW_LIGHT_DIRECTION}};
     for (int k = 0; k < d; ++k)
         v.push_back({"camera bounce " + std::to_string(k), sample_draw_camera_bounce(k), SAMPLE_DRAWS_PER_BOUNCE});

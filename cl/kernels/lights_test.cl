@@ -72,8 +72,8 @@ __kernel void light_select_test(SCENE_KERNEL_ARGS, uint seed, __global float2* o
     uint rays = 0;
     SceneData scene = SCENE_DATA_FROM_KERNEL_ARGS(&rays);
     Rng rng = rng_init((uint)gid, 0u, seed);
-    float select_pdf = 0.0f;
-    int i = sample_light_index(&scene, rng_next(&rng), &select_pdf);
+    float select_pdf = 0.0f, u_rest;
+    int i = sample_light_index(&scene, rng_next(&rng), &select_pdf, &u_rest);
     out[gid] = (float2)((float)i, select_pdf);
 }
 
@@ -84,10 +84,28 @@ __kernel void light_select_at_point_test(SCENE_KERNEL_ARGS, uint seed, float4 x,
     uint rays = 0;
     SceneData scene = SCENE_DATA_FROM_KERNEL_ARGS(&rays);
     Rng rng = rng_init((uint)gid, 0u, seed);
-    float select_pdf = 0.0f;
-    int i = sample_light_for_point(&scene, x.xyz, rng_next(&rng), &select_pdf);
+    float select_pdf = 0.0f, u_rest;
+    int i = sample_light_for_point(&scene, x.xyz, rng_next(&rng), &select_pdf, &u_rest);
     float ratio = i >= 0 ? light_sample_selection_ratio(&scene, i, x.xyz) : 0.0f;
     out[gid] = (float4)((float)i, select_pdf, ratio, 0.0f);
+}
+
+/* What a light choice leaves of its draw (rest_of_choice), on the evenly spaced draws
+ * u = (i + 1/2) / n: out[i] = (light picked by power, its rest, light a sample from x picks
+ * (with NEE_EVERY_LIGHT: among the area lights, group 0), its rest). */
+__kernel void light_choice_rest_test(SCENE_KERNEL_ARGS, uint n, float4 x, __global float4* out) {
+    int gid = get_global_id(0);
+    uint rays = 0;
+    SceneData scene = SCENE_DATA_FROM_KERNEL_ARGS(&rays);
+    float u = ((float)gid + 0.5f) / (float)n;
+    float select_pdf, rest_by_power, rest_at_point;
+    int by_power = sample_light_index(&scene, u, &select_pdf, &rest_by_power);
+#ifdef NEE_EVERY_LIGHT
+    int at_point = nee_group_light(&scene, 0, x.xyz, u, &select_pdf, &rest_at_point);
+#else
+    int at_point = sample_light_for_point(&scene, x.xyz, u, &select_pdf, &rest_at_point);
+#endif
+    out[gid] = (float4)((float)by_power, rest_by_power, (float)at_point, rest_at_point);
 }
 
 #ifdef NEE_EVERY_LIGHT
@@ -102,8 +120,8 @@ __kernel void light_groups_at_point_test(SCENE_KERNEL_ARGS, uint seed, float4 x,
     float u_light = rng_next(&rng);
     int groups = nee_group_count(&scene);
     for (int g = 0; g < min(groups, 4); ++g) {
-        float pick_pdf = 0.0f;
-        int i = nee_group_light(&scene, g, x.xyz, u_light, &pick_pdf);
+        float pick_pdf = 0.0f, u_rest;
+        int i = nee_group_light(&scene, g, x.xyz, u_light, &pick_pdf, &u_rest);
         float ratio = i >= 0 ? light_sample_selection_ratio(&scene, i, x.xyz) : 0.0f;
         out[4 * gid + g] = (float4)((float)i, pick_pdf, ratio, (float)groups);
     }
