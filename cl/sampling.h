@@ -51,10 +51,21 @@ inline float one_minus_cos_between(float3 w, float3 axis) {
     return c > 0.5f ? length_squared(cross(w, axis)) / (1.0f + c) : 1.0f - c;
 }
 
-/* Uniform point on a triangle as barycentrics (b0, b1); b2 = 1 - b0 - b1. */
+/* Uniform point on a triangle as barycentrics (b0, b1); b2 = 1 - b0 - b1. Heitz's
+ * low-distortion map (2019, "A Low-Distortion Map Between Triangle and Square"; pbrt-v4's
+ * SampleUniformTriangle): the square's halves either side of its diagonal are sheared onto the
+ * triangle, so strata of u stay compact on it (the square-root map squeezes those near u.x = 0
+ * into slivers at one corner), and it takes no square root. */
 inline float2 sample_uniform_triangle(float2 u) {
-    float su0 = sqrt(u.x);
-    return (float2)(1.0f - su0, u.y * su0);
+    float b0, b1;
+    if (u.x < u.y) {
+        b0 = 0.5f * u.x;
+        b1 = u.y - b0;
+    } else {
+        b1 = 0.5f * u.y;
+        b0 = u.x - b1;
+    }
+    return (float2)(b0, b1);
 }
 
 /* Index i with cdf[i] <= u < cdf[i + 1] in a normalised CDF of n + 1 entries (cdf[0] = 0,
