@@ -68,13 +68,19 @@ inline float ggx_g(float3 wo, float3 wi, float alpha) {
     return 1.0f / (1.0f + ggx_lambda(wo, alpha) + ggx_lambda(wi, alpha));
 }
 
-/* Half vector sampled from D(wh) |cos theta_h| in the upper hemisphere. */
-inline float3 ggx_sample_wh(float2 u, float alpha) {
-    float tan2 = alpha * alpha * u.x / (1.0f - u.x);
-    float cos_theta = 1.0f / sqrt(1.0f + tan2);
-    float sin_theta = sqrt(fmax(0.0f, 1.0f - cos_theta * cos_theta));
-    float2 cs = unit_circle_turns(u.y);
-    return (float3)(sin_theta * cs.x, sin_theta * cs.y, cos_theta);
+/* Half vector sampled from the normals visible from wo (wo.z > 0): D_wo(wh) = G1(wo) max(0,
+ * wo.wh) D(wh) / wo.z (Heitz 2018), by Dupuy & Benyoub's spherical caps (2023, "Sampling
+ * Visible GGX Normals with Spherical Caps"): wo stretched to the unit-roughness configuration,
+ * where the visible normals are those of a uniformly sampled cap of the sphere around it. Unlike
+ * sampling D(wh) |cos theta_h|, no half vector faces away from wo and the reflected direction's
+ * weight f cos / pdf is at most G2 / G1 <= 1: no spikes at grazing angles. */
+inline float3 ggx_sample_visible_wh(float3 wo, float2 u, float alpha) {
+    float3 wo_std = normalize((float3)(alpha * wo.x, alpha * wo.y, wo.z));
+    float z = (1.0f - u.y) * (1.0f + wo_std.z) - wo_std.z;
+    float sin_theta = sqrt(fmax(0.0f, 1.0f - z * z));
+    float2 cs = unit_circle_turns(u.x);
+    float3 wh_std = (float3)(sin_theta * cs.x, sin_theta * cs.y, z) + wo_std;
+    return normalize((float3)(alpha * wh_std.x, alpha * wh_std.y, fmax(wh_std.z, 0.0f)));
 }
 
 /* Glossy lobe in the shading frame; wo and wi on the same side (either side). */
@@ -91,7 +97,8 @@ inline float glossy_pdf_local(const Bsdf* b, float3 wo, float3 wi) {
     float3 wh = wi + wo;
     if (wh.x == 0.0f && wh.y == 0.0f && wh.z == 0.0f) return 0.0f;
     wh = normalize(wh);
-    return ggx_d(wh, b->alpha) * fabs(wh.z) / (4.0f * fabs(dot(wo, wh)));
+    /* D_wo(wh) / (4 |wo.wh|), the visible normals' density carried to wi; wo.wh > 0 here. */
+    return ggx_d(wh, b->alpha) / ((1.0f + ggx_lambda(wo, b->alpha)) * 4.0f * fabs(wo.z));
 }
 
 /* Probability of choosing the diffuse lobe when sampling a glossy material. */
@@ -215,7 +222,8 @@ inline int bsdf_sample(const Bsdf* b, float3 wo_world, float3 u, int mode, BsdfS
     float3 wi;
 #ifdef HAS_GLOSSY
     if (b->kind == MATERIAL_GLOSSY && u.x >= glossy_diffuse_probability(b)) {
-        float3 wh = ggx_sample_wh((float2)(u.y, u.z), b->alpha);
+        float3 wo_up = wo.z < 0.0f ? -wo : wo;
+        float3 wh = ggx_sample_visible_wh(wo_up, (float2)(u.y, u.z), b->alpha);
         if (wo.z < 0.0f) wh = -wh;
         wi = -wo + 2.0f * dot(wo, wh) * wh;
     } else

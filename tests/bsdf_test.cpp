@@ -51,9 +51,11 @@ struct RefBsdf {
         double d = luminance(kd), s = luminance(ks);
         return kind == MATERIAL_GLOSSY ? (d + s > 0 ? d / (d + s) : 1.0) : 1.0;
     }
+    // The visible normals' density (Heitz 2018) carried to wi: G1(wo) D(h) / (4 |cos theta_o|).
     double glossy_pdf(D3 wo, D3 wi) const {
         D3 h = normalize(wo + wi);
-        return ggx_d(dot(h, n), alpha) * std::fabs(dot(h, n)) / (4 * std::fabs(dot(wo, h)));
+        const double co = dot(wo, n);
+        return ggx_d(dot(h, n), alpha) / ((1 + ggx_lambda(co, alpha)) * 4 * std::fabs(co));
     }
     double pdf(D3 wo, D3 wi) const {
         double co = dot(wo, n), ci = dot(wi, n);
