@@ -264,8 +264,12 @@ struct Reference {
         double c2 = cos_h * cos_h, a2 = alpha * alpha, e = 1 + (1 - c2) / c2 / a2;
         return 1 / (kPi * a2 * c2 * c2 * e * e);
     }
+    double ggx_lambda(double cos_t, double alpha) const {
+        double c2 = cos_t * cos_t;
+        return 0.5 * (-1 + std::sqrt(1 + alpha * alpha * (1 - c2) / c2));
+    }
     // bsdf_pdf in the shading frame (README "Materials"): diffuse cos/pi, glossy the mixture
-    // of it and D(h) |cos h| / (4 |wo.h|) by the luminance of kd and ks.
+    // of it and the visible normals' G1(wo) D(h) / (4 |cos o|) by the luminance of kd and ks.
     double bsdf_pdf(int material, D3 ns, D3 wo, D3 wi) const {
         const Material& m = ds.materials[material];
         double co = dot(wo, ns), ci = dot(wi, ns);
@@ -275,7 +279,7 @@ struct Reference {
         double ld = luminance(d3(m.kd)), ls = luminance(d3(m.ks));
         double pd = ld + ls > 0 ? ld / (ld + ls) : 1;
         D3 h = normalize(wo + wi);
-        double glossy = ggx_d(dot(h, ns), m.alpha) * std::fabs(dot(h, ns)) / (4 * std::fabs(dot(wo, h)));
+        double glossy = ggx_d(dot(h, ns), m.alpha) / ((1 + ggx_lambda(co, m.alpha)) * 4 * std::fabs(co));
         return pd * diffuse + (1 - pd) * glossy;
     }
 };
