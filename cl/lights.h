@@ -215,7 +215,9 @@ inline float light_sample_selection_ratio(const SceneData* scene, int i, float3 
 
 /* ---- Environment map distribution ------------------------------------------------------
  * env_distribution holds, for a W x H map (row 0 = the +y pole):
- *   func      [W*H]       luminance * sin(theta) per texel, the density being sampled
+ *   func      [W*H]       per texel, the density being sampled: the luminance's excess over the
+ *                         map's mean times sin(theta), 0 at or below the mean (bdpt, pt), or the
+ *                         luminance times sin(theta) (lt); host/render/device_scene.h says why
  *   cond_cdf  [H*(W+1)]   per-row CDFs over u
  *   marg_cdf  [H+1]       CDF over rows
  *   integral  [1]         mean of func = its integral over the unit square

@@ -60,6 +60,11 @@ const TestScene& map_scene() {
     static TestScene scene(light_scene(true), 32, 32);
     return scene;
 }
+// The same scene as the light tracer has it: the map sampled by luminance (render/device_scene.h).
+const TestScene& luminance_map_scene() {
+    static TestScene scene(light_scene(true), 32, 32, Integrator::Lt);
+    return scene;
+}
 const TestScene& constant_scene() {
     static TestScene scene(light_scene(false), 32, 32);
     return scene;
@@ -92,7 +97,7 @@ double spot_falloff(const Light& l, D3 w_from_light) {
 
 // The environment light's sampling distribution: the per-texel weights `func` (row 0 = +y, u =
 // phi / 2pi from +x toward +z; README) as the host tabulated them (the first W*H entries of
-// env_distribution, whose weighting rule EnvironmentMapSamplingFollowsDocumentedLuminance
+// env_distribution, whose weighting rule EnvironmentMapSamplingFollowsDocumentedDistribution
 // checks), with everything derived from them -- normalisation, texel lookup, the solid-angle
 // density func / (integral 2 pi^2 sin theta) -- recomputed here in double.
 struct EnvReference {
@@ -310,14 +315,22 @@ TEST(Lights, DirectionalSampleLi) {
 }
 
 // Environment map Sample_Li: pdf_w equals environment_pdf_w at the returned direction and the
-// port of the distribution; li is the texel times the scale; E[1/pdf_w] = 4 pi (all texels are
-// positive, so the support is the sphere). Samples within 1e-4 (in u, v) of a texel edge may
+// port of the distribution; li is the texel times the scale; E[1/pdf_w] is the solid angle of
+// the texels the distribution samples: 4 pi by luminance (all texels are positive), those above
+// the map's mean compensated. Samples within 1e-4 (in u, v) of a texel edge may
 // be assigned to the neighbouring texel by float rounding and are left out of the pointwise
 // comparisons; so are samples with sin(theta) < 0.05, where acos(w.y) loses 6e-8/theta^2 of
 // relative precision (pdf_w divides by sin theta).
-TEST(Lights, EnvironmentMapSampleLi) {
-    const TestScene& scene = map_scene();
+void check_environment_sample_li(const TestScene& scene) {
     EnvReference env(scene.ds);
+    double support = 0;  // the sampled texels' solid angle
+    for (int y = 0; y < env.h; ++y)
+        for (int x = 0; x < env.w; ++x)
+            if (env.func[size_t(y * env.w + x)] > 0)
+                support += 2 * kPi / env.w * (std::cos(kPi * y / env.h) - std::cos(kPi * (y + 1) / env.h));
+    if (scene.ds.env_sampling == EnvironmentSampling::Luminance) {
+        EXPECT_NEAR(support, 4 * kPi, 1e-9);
+    }
     const size_t n = 1 << 17;
     std::vector<LiSample> s = sample_li(scene, kEnvironment, kRefs[0], n, 23);
     size_t compared = 0;
@@ -334,7 +347,16 @@ TEST(Lights, EnvironmentMapSampleLi) {
     }
     EXPECT_GT(compared, n * 9 / 10);
     MeanEstimate omega = mean_estimate(n, [&](size_t i) { return 1 / s[i].pdf_w; });
-    EXPECT_NEAR(omega.mean, 4 * kPi, kSigmas * omega.std_error) << "E[1/pdf_w]";
+    EXPECT_NEAR(omega.mean, support, kSigmas * omega.std_error) << "E[1/pdf_w]";
+}
+
+TEST(Lights, EnvironmentMapSampleLi) {
+    {
+        SCOPED_TRACE("compensated");
+        check_environment_sample_li(map_scene());
+    }
+    SCOPED_TRACE("by luminance");
+    check_environment_sample_li(luminance_map_scene());
 }
 
 // The environment map's sampled directions land in texel i with probability func_i / sum(func)
@@ -353,35 +375,72 @@ TEST(Lights, EnvironmentMapSamplesFollowTheMapDistribution) {
     expect_fit(obs_le, expected, "environment Sample_Le texels");
 }
 
-// KNOWN FAILURE -- documentation and code disagree (reported; not fixed here, this test only
-// touches tests/): README ("Environment maps: ... Importance sampled by luminance x sin theta")
-// and cl/lights.h ("func [W*H] luminance * sin(theta) per texel, the density being sampled")
-// document the environment map's sampling distribution as Rec. 709 luminance times sin(theta),
-// but host/render/device_scene.cpp environment_distribution() weights each texel by mean_rgb
-// (the plain mean of r, g, b) times sin(theta). Sampling stays unbiased (environment_pdf_w reads
-// the same table; the tests above check sampler, table and pdf against each other), but it is
-// not the documented distribution: on this map with coloured texels a chi-square of the sampled
-// texels against luminance x sin(theta) rejects it (chi2 ~3000 for 511 dof, p ~ 0). If the code
-// is changed to luminance this passes as it stands; if the docs are changed to "mean of rgb"
-// instead, change `weight` below to match.
-TEST(Lights, EnvironmentMapSamplingFollowsDocumentedLuminance) {
-    const TestScene& scene = map_scene();
-    const DeviceScene& ds = scene.ds;
+// The environment map's sampling distribution is the documented one (README "Environment
+// maps", render/device_scene.h): Rec. 709 luminance x sin(theta) for the light tracer, and for
+// bdpt and pt the luminance's excess over the map's mean radiance (texels weighted by sin theta),
+// so that the texels at or below the mean are never sampled (on this map 204 of the 512 texels
+// are above it: the spot and the brighter upper rows). Each weighting is checked against the texels that
+// the kernel's Sample_Li picks (2^18 draws, chi-square; a sample in a texel of weight 0 fails
+// at once); the other rule is rejected as well, so the test tells the two apart.
+std::vector<double> documented_env_weights(const DeviceScene& ds, EnvironmentSampling how) {
     const int w = ds.info.env_width, h = ds.info.env_height;
-    std::vector<double> lum(size_t(w) * h);
-    double sum = 0;
+    auto lum = [&](int x, int y) {
+        const cl_float4& t = ds.env_texels[size_t(y) * w + x];
+        return 0.2126 * t.s[0] + 0.7152 * t.s[1] + 0.0722 * t.s[2];
+    };
+    auto sin_theta = [&](int y) { return std::sin(kPi * (y + 0.5) / h); };
+    double mean = 0, weight = 0;
     for (int y = 0; y < h; ++y)
-        for (int x = 0; x < w; ++x) {
-            const cl_float4& t = ds.env_texels[size_t(y) * w + x];
-            double weight = 0.2126 * t.s[0] + 0.7152 * t.s[1] + 0.0722 * t.s[2];
-            sum += lum[size_t(y) * w + x] = weight * std::sin(kPi * (y + 0.5) / h);
-        }
-    EnvReference env(ds);
+        for (int x = 0; x < w; ++x) mean += lum(x, y) * sin_theta(y), weight += sin_theta(y);
+    mean = how == EnvironmentSampling::Compensated ? mean / weight : 0.0;
+    std::vector<double> weights;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) weights.push_back(std::max(lum(x, y) - mean, 0.0) * sin_theta(y));
+    return weights;
+}
+
+ChiSquare env_texels_against(const TestScene& scene, const std::vector<double>& weights) {
+    EnvReference env(scene.ds);
     const size_t n = 1 << 18;
-    std::vector<double> expected(lum.size()), observed(lum.size(), 0.0);
-    for (size_t i = 0; i < lum.size(); ++i) expected[i] = double(n) * lum[i] / sum;
+    double sum = 0;
+    for (double x : weights) sum += x;
+    std::vector<double> expected(weights.size()), observed(weights.size(), 0.0);
+    for (size_t i = 0; i < weights.size(); ++i) expected[i] = double(n) * weights[i] / sum;
     for (const LiSample& x : sample_li(scene, kEnvironment, kRefs[1], n, 29)) observed[env.texel(x.wi)] += 1;
-    expect_fit(observed, expected, "environment texels against luminance x sin(theta) (README, cl/lights.h)");
+    return chi_square(observed, expected);
+}
+
+TEST(Lights, EnvironmentMapSamplingFollowsDocumentedDistribution) {
+    const TestScene& compensated = map_scene();
+    const TestScene& by_luminance = luminance_map_scene();
+    ASSERT_EQ(compensated.ds.env_sampling, EnvironmentSampling::Compensated);
+    ASSERT_EQ(by_luminance.ds.env_sampling, EnvironmentSampling::Luminance);
+    const std::vector<double> excess = documented_env_weights(compensated.ds, EnvironmentSampling::Compensated);
+    const std::vector<double> luminance = documented_env_weights(compensated.ds, EnvironmentSampling::Luminance);
+    const size_t above_mean = size_t(std::count_if(excess.begin(), excess.end(), [](double x) { return x > 0; }));
+    EXPECT_GT(above_mean, 8u);
+    EXPECT_LT(above_mean, excess.size() / 2);
+
+    ChiSquare c = env_texels_against(compensated, excess);
+    EXPECT_GT(c.p_value, kChiSquareSignificance) << "compensated: chi2 " << c.statistic << ", worst " << c.worst;
+    c = env_texels_against(by_luminance, luminance);
+    EXPECT_GT(c.p_value, kChiSquareSignificance) << "luminance: chi2 " << c.statistic << ", worst " << c.worst;
+    EXPECT_LT(env_texels_against(compensated, luminance).p_value, kChiSquareSignificance);
+    EXPECT_LT(env_texels_against(by_luminance, excess).p_value, kChiSquareSignificance);
+}
+
+// A map whose texels all equal their mean has no excess to sample: it is sampled by luminance.
+TEST(Lights, ConstantEnvironmentMapIsSampledByLuminance) {
+    EnvironmentMap map;
+    map.width = 8;
+    map.height = 4;
+    map.rgb.assign(size_t(map.width) * map.height * 3, 0.75f);
+    EXPECT_EQ(environment_distribution(map, EnvironmentSampling::Compensated),
+              environment_distribution(map, EnvironmentSampling::Luminance));
+    map.rgb[0] = 2.0f;  // one texel above the mean: only it is sampled
+    const std::vector<float> d = environment_distribution(map, EnvironmentSampling::Compensated);
+    EXPECT_GT(d[0], 0.0f);
+    for (int i = 1; i < map.width * map.height; ++i) EXPECT_EQ(d[size_t(i)], 0.0f) << "texel " << i;
 }
 
 // environment_pdf_w is a normalised density: at texel centres it is func/(integral 2 pi^2

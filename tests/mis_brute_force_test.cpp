@@ -47,7 +47,9 @@
 //    plane: the BSDF's density is 0 both ways through it) means the strategies sampling through
 //    that vertex cannot produce the path; they get no weight and the others share all of it.
 //    (clbdpt's BSDF is 0 there as well, so such paths carry no energy in a render; the rule is
-//    checked here for itself: remapping that 0 to 1, as pbrt-v3 does, fails.)
+//    checked here for itself: remapping that 0 to 1, as pbrt-v3 does, fails.) The environment
+//    map's density toward a texel at or below its mean is such a 0 as well (bdpt and pt sample
+//    it by its excess over the mean, render/device_scene.h): only s = 0 produces those paths.
 #include <gtest/gtest.h>
 
 #include "kernel_test_util.h"
@@ -774,6 +776,7 @@ void check_integrator(Integrator integrator, bool thin, uint64_t seed, Mix mix =
     size_t attempts = 0;
     std::vector<size_t> per_kind(5, 0);
     size_t across_terminator = 0;  // paths across a terminator band with two or more producers
+    size_t env_left_to_bsdf_sampling = 0;  // environment paths that only s = 0 can produce
     size_t medium_vertices = 0;
     size_t area_light_seen = 0;  // paths x_0 x_1 of the lens and an area light: (0,2) and maybe (1,1)
     while (paths.size() < target && attempts < 200 * target) {
@@ -785,6 +788,11 @@ void check_integrator(Integrator integrator, bool thin, uint64_t seed, Mix mix =
         const int n = int(path.x.size());
         Densities d = densities(ref, path);
         bool area = light_kind(ts.ds, path) == LIGHT_AREA;
+        // An environment map sampled by its excess over its mean (render/device_scene.h) never
+        // picks a direction at or below the mean: no strategy with a light vertex can produce
+        // such a path.
+        const bool env_unsampled = light_kind(ts.ds, path) == LIGHT_ENVIRONMENT &&
+                                   ref.env_pdf(dir(path.x[size_t(n - 2)], path.x[size_t(n - 1)])) == 0;
         std::vector<int> producers;
         double sum = 0;
         std::vector<double> p(n + 1, 0.0);
@@ -796,9 +804,10 @@ void check_integrator(Integrator integrator, bool thin, uint64_t seed, Mix mix =
             for (int j = t; j < n; ++j) ps *= d.light[j];
             // A light sample's own choice of light, from the path's second vertex.
             if (s == 1 && t >= 2) ps *= ref.light_sample_ratio(path.light, path.x[size_t(n - 2)].p);
-            // Only a vertex across a terminator band has a density 0 that is not a delta's:
-            // strategies that would sample through it cannot produce the path.
-            if (ps == 0 && path.across_terminator) continue;
+            // Only a vertex across a terminator band and an environment direction left to BSDF
+            // sampling have a density 0 that is not a delta's: strategies that would sample
+            // through them cannot produce the path.
+            if (ps == 0 && (path.across_terminator || env_unsampled)) continue;
             ASSERT_TRUE(ps > 0 && std::isfinite(ps)) << "degenerate density for s " << s;
             ps *= sample_count(integrator, mix, s, t);
             p[s] = ps;
@@ -807,6 +816,7 @@ void check_integrator(Integrator integrator, bool thin, uint64_t seed, Mix mix =
         }
         if (producers.empty()) continue;
         if (path.across_terminator && producers.size() >= 2) ++across_terminator;
+        env_left_to_bsdf_sampling += env_unsampled;
         if (n == 2 && area) ++area_light_seen;
         for (const HostVertex& v : path.x) medium_vertices += v.medium;
         size_t index = paths.size();
@@ -838,6 +848,9 @@ void check_integrator(Integrator integrator, bool thin, uint64_t seed, Mix mix =
     }
     // Whether bdpt joins a light point to the lens ((1,1), with a thin lens or media) shows in them.
     EXPECT_GT(area_light_seen, target / 100) << "paths of an area light seen directly";
+    if (integrator != Integrator::Lt && ts.ds.info.env_width > 0) {  // the media scene's is constant
+        EXPECT_GT(env_left_to_bsdf_sampling, target / 100) << "environment paths below the map's mean";
+    }
     // Full bdpt has the most strategies that can connect at such a vertex.
     if (integrator == Integrator::Bdpt && mix.light_subpaths == 1 && mix.inner_connections) {
         EXPECT_GT(across_terminator, target / 50) << "terminator paths";

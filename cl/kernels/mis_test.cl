@@ -5,8 +5,8 @@
  * For every split (s, t), s + t = k + 1, the item rebuilds the light subpath that strategy would
  * have had — x_k .. x_t reversed, with forward densities computed from the light side and
  * reverse densities taken from the camera walk — and calls mis_weight. The weights of the
- * strategies that can produce the path (enabled, and joining two non-specular vertices) must
- * add up to 1. With media, the reversed vertices swap their segments' distance densities and
+ * strategies that can produce the path (enabled, joining two non-specular vertices, and with a
+ * light that emits toward the path at a density above 0) must add up to 1. With media, the reversed vertices swap their segments' distance densities and
  * the connection's are those of the camera walk's segment it replaces.
  *
  * out[gid] = (largest |sum - 1| over the item's paths, number of paths checked). */
@@ -76,6 +76,9 @@ __kernel void mis_weight_sums(SCENE_KERNEL_ARGS, RenderParams params, __global f
                 v.pdf_rev = x[k - j].pdf_fwd;
                 light_path[j] = v;
             }
+            /* A light that never emits toward x_{k-1} from x_k (an environment map's texel at or
+             * below its mean, render/device_scene.h) leaves the path to s = 0. */
+            if (s > 0 && light_path[0].pdf_fwd == 0.0f) continue;
             /* The connection joins x_{t-1} and x_t along the walk's own segment. */
             float to_qs = 1.0f, to_pt = 1.0f;
 #ifdef HAS_MEDIA

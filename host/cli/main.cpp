@@ -347,7 +347,12 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
     }
     DeviceContext& device = *devices.front();
     const Clock::time_point device_scene_start = Clock::now();
-    DeviceScene ds = build_device_scene(scene, width, height);
+    // Only an explicit --integrator lt renders with the light tracer alone: the pilot never picks
+    // it where there is an environment, and a resumed render keeps its --integrator
+    // (image_settings).
+    DeviceScene ds = build_device_scene(scene, width, height,
+                                        options.integrator == Integrator::Lt ? EnvironmentSampling::Luminance
+                                                                             : EnvironmentSampling::Compensated);
     const double device_scene_seconds = seconds_since(device_scene_start);
     if (leader) {
         for (const std::string& w : ds.warnings) std::fprintf(stderr, "clbdpt: warning: %s\n", w.c_str());

@@ -122,22 +122,42 @@ Camera make_camera(const CameraDesc& desc, int width, int height) {
     return c;
 }
 
-std::vector<float> environment_distribution(const EnvironmentMap& map) {
+std::vector<float> environment_distribution(const EnvironmentMap& map, EnvironmentSampling how) {
     const int w = map.width, h = map.height;
     std::vector<float> d(size_t(w) * h + size_t(h) * (w + 1) + (h + 1) + 1);
     float* func = d.data();
     float* cond = func + size_t(w) * h;
     float* marg = cond + size_t(h) * (w + 1);
+    // sin(theta) at the row centre: the map's texels shrink toward the poles.
+    std::vector<float> sin_theta(h);
+    for (int y = 0; y < h; ++y) sin_theta[size_t(y)] = std::sin(kPi * (float(y) + 0.5f) / float(h));
+    auto texel_luminance = [&](int x, int y) {
+        const float* px = &map.rgb[(size_t(y) * w + x) * 3];
+        return luminance({px[0], px[1], px[2]});
+    };
+    // The map's mean radiance over the sphere (texels weighted by their solid angle), which
+    // compensation subtracts.
+    float mean = 0;
+    if (how == EnvironmentSampling::Compensated) {
+        double sum = 0, weight = 0;
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x) {
+                sum += double(texel_luminance(x, y)) * sin_theta[size_t(y)];
+                weight += sin_theta[size_t(y)];
+            }
+        mean = weight > 0 ? float(sum / weight) : 0.0f;
+    }
+    double total = 0;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x)
+            total += func[size_t(y) * w + x] = std::max(texel_luminance(x, y) - mean, 0.0f) * sin_theta[size_t(y)];
+    // Every texel at the mean (a constant map, up to float rounding): nothing is brighter than
+    // the rest, so it is sampled by luminance after all.
+    if (total == 0 && mean > 0) return environment_distribution(map, EnvironmentSampling::Luminance);
     std::vector<float> row_integrals(h);
     for (int y = 0; y < h; ++y) {
-        // sin(theta) at the row centre: the map's texels shrink toward the poles.
-        float sin_theta = std::sin(kPi * (float(y) + 0.5f) / float(h));
-        std::vector<float> row(w);
-        for (int x = 0; x < w; ++x) {
-            const float* px = &map.rgb[(size_t(y) * w + x) * 3];
-            row[x] = func[size_t(y) * w + x] = luminance({px[0], px[1], px[2]}) * sin_theta;
-        }
-        row_integrals[y] = build_cdf(row, cond + size_t(y) * (w + 1)) / float(w);
+        std::vector<float> row(func + size_t(y) * w, func + size_t(y + 1) * w);
+        row_integrals[size_t(y)] = build_cdf(row, cond + size_t(y) * (w + 1)) / float(w);
     }
     float integral = build_cdf(row_integrals, marg) / float(h);
     marg[h + 1] = integral;
@@ -154,8 +174,9 @@ int medium_at(const DeviceScene& ds, int scene_medium, Vec3 p) {
 
 }  // namespace
 
-DeviceScene build_device_scene(const Scene& scene, int width, int height) {
+DeviceScene build_device_scene(const Scene& scene, int width, int height, EnvironmentSampling env_sampling) {
     DeviceScene ds;
+    ds.env_sampling = env_sampling;
     Bvh bvh = build_bvh(scene.triangles);
     ds.bvh_build_seconds = bvh.build_seconds;
     ds.source_triangles = scene.triangles.size();
@@ -316,7 +337,7 @@ DeviceScene build_device_scene(const Scene& scene, int width, int height) {
         ds.env_texels.resize(size_t(map.width) * map.height);
         for (size_t i = 0; i < ds.env_texels.size(); ++i)
             ds.env_texels[i] = float4_of({map.rgb[i * 3], map.rgb[i * 3 + 1], map.rgb[i * 3 + 2]});
-        ds.env_distribution = environment_distribution(map);
+        ds.env_distribution = environment_distribution(map, env_sampling);
         ds.info.env_width = map.width;
         ds.info.env_height = map.height;
     }

@@ -12,6 +12,20 @@
 
 namespace clbdpt {
 
+// How light samples and light subpaths pick directions toward an environment map (cl/lights.h,
+// README "Environment maps").
+// - Compensated: each texel in proportion to its luminance's excess over the map's mean, texels
+//   at or below the mean never (MIS compensation: Karlik, Sik, Vevoda, Skrivan & Krivanek 2019,
+//   "MIS compensation: optimizing sampling techniques in multiple importance sampling"). Sampling
+//   by luminance gives a direction below the mean less density than uniform sphere sampling,
+//   1 / (4 pi), which a cosine lobe already exceeds over all but its grazing quarter; so those
+//   directions are left to BSDF sampling, and the light samples go where the light is bright.
+//   Unbiased wherever BSDF sampling can reach the environment (s = 0): bdpt and pt. A map whose
+//   texels all equal their mean keeps the luminance distribution.
+// - Luminance: each texel in proportion to its luminance, for the light tracer (t = 1), which
+//   has no other strategy for a direction of density 0.
+enum class EnvironmentSampling { Compensated = 0, Luminance = 1 };
+
 struct DeviceScene {
     std::vector<BvhNode> nodes;
     // Per BVH reference, in BVH order: a triangle cut by spatial splits appears more than once
@@ -25,6 +39,7 @@ struct DeviceScene {
     std::vector<float> light_power;       // per light: luminance of its emitted power (host only)
     std::vector<cl_float4> env_texels;    // env map, row 0 = +y
     std::vector<float> env_distribution;  // see cl/lights.h
+    EnvironmentSampling env_sampling = EnvironmentSampling::Compensated;
     std::vector<TriangleUV> uvs;          // BVH order; empty without textures
     std::vector<TextureInfo> textures;
     std::vector<uint32_t> texels;
@@ -39,7 +54,8 @@ struct DeviceScene {
 };
 
 // width/height: the film size actually rendered (scene's, or the command line's overrides).
-DeviceScene build_device_scene(const Scene& scene, int width, int height);
+DeviceScene build_device_scene(const Scene& scene, int width, int height,
+                               EnvironmentSampling env_sampling = EnvironmentSampling::Compensated);
 
 Camera make_camera(const CameraDesc& desc, int width, int height);
 
@@ -50,6 +66,6 @@ Vec3 vec3_of(const cl_float4& v);
 void store_triangle_normals(std::vector<Triangle>& triangles);
 
 // Sampling distribution of a lat-long map (layout in cl/lights.h).
-std::vector<float> environment_distribution(const EnvironmentMap& map);
+std::vector<float> environment_distribution(const EnvironmentMap& map, EnvironmentSampling how);
 
 }  // namespace clbdpt

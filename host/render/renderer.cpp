@@ -47,6 +47,10 @@ Renderer::Renderer(DeviceContext& device, const DeviceScene& scene, const Render
                    std::shared_ptr<SceneBuffers> buffers)
     : device_(device), scene_(scene), options_(options), scene_buffers_(std::move(buffers)) {
     if (options.max_depth < 0) throw Error("--max-depth must be >= 0");
+    // A light tracer has no strategy for the directions a compensated map never samples.
+    if (options.integrator == Integrator::Lt && scene.info.env_width > 0 &&
+        scene.env_sampling != EnvironmentSampling::Luminance)
+        throw Error("internal: the light tracer needs the environment map sampled by luminance (render/device_scene.h)");
     set_strategy_mix(options.light_subpaths, options.inner_connections);  // validates it
     if (options.sampler == SamplerKind::ZSobol) {
         // ZSobol orders a known number of samples per pixel (cl/rng.h).

@@ -13,6 +13,7 @@ uint64_t scene_fingerprint(const DeviceScene& s) {
     h.array(s.lights);
     h.array(s.light_cdf);
     h.array(s.env_texels);
+    h.array(s.env_distribution);
     h.array(s.uvs);
     h.array(s.textures);
     h.array(s.texels);
