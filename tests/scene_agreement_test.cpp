@@ -76,6 +76,7 @@ TEST_P(SceneAgreementTest, IntegratorsAgree) {
 // with the map sampled by luminance, where every direction has a light sample's density (an
 // estimator of the same image that shares no light density with them), on sky, whose sun
 // highlight and caustics are the heavy tails this is for; same regions and tolerance as above.
+// A light tracer is refused such a map (it takes the one by luminance).
 TEST(SceneAgreement, EnvironmentSampledByExcessAgreesWithLuminance) {
     const std::string path = scene_path("sky");
     if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " does not exist";
@@ -91,6 +92,8 @@ TEST(SceneAgreement, EnvironmentSampledByExcessAgreesWithLuminance) {
         render_stats_or_fail(by_excess, make_options(Integrator::Bdpt, kMaxDepth, 507), passes, kBlocks, "bdpt");
     expect_agree(pt, reference, kSigmas, "pt vs pt with the map sampled by luminance");
     expect_agree(bdpt, reference, kSigmas, "bdpt vs pt with the map sampled by luminance");
+    // The light tracer has no strategy for the directions left to BSDF sampling: refused.
+    EXPECT_THROW(Renderer(test_device(), by_excess, make_options(Integrator::Lt, kMaxDepth, 508)), Error);
 }
 
 INSTANTIATE_TEST_SUITE_P(Bundled, SceneAgreementTest,
