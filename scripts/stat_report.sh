@@ -17,7 +17,7 @@ set -euo pipefail
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 scale="${1:-8}"
 build="${2:-$repo/build}"
-filter="${STAT_FILTER:-*FurnaceTest*:*SceneAgreementTest*:HardCases.*:*SceneScaleTest*:Textures.*}"
+filter="${STAT_FILTER:-*FurnaceTest*:*SceneAgreementTest*:SceneAgreement.*:HardCases.*:*SceneScaleTest*:Textures.*}"
 
 if ! [[ "$scale" =~ ^[1-9][0-9]*$ ]]; then
     echo "stat_report: SCALE must be a positive integer, got '$scale'" >&2
