@@ -317,9 +317,8 @@ TEST(Lights, DirectionalSampleLi) {
 // Environment map Sample_Li: pdf_w equals environment_pdf_w at the returned direction and the
 // port of the distribution; li is the texel times the scale; E[1/pdf_w] is the solid angle of
 // the texels the distribution samples: 4 pi by luminance (all texels are positive), those above
-// the map's mean compensated. Samples within 1e-4 (in u, v) of a texel edge may
-// be assigned to the neighbouring texel by float rounding and are left out of the pointwise
-// comparisons; so are samples with sin(theta) < 0.05, where acos(w.y) loses 6e-8/theta^2 of
+// the map's mean compensated. Samples within 1e-4 (in u, v) of a texel edge may be assigned to
+// the neighbouring texel by float rounding and are left out of the pointwise comparisons; so are samples with sin(theta) < 0.05, where acos(w.y) loses 6e-8/theta^2 of
 // relative precision (pdf_w divides by sin theta).
 void check_environment_sample_li(const TestScene& scene) {
     EnvReference env(scene.ds);
@@ -379,9 +378,9 @@ TEST(Lights, EnvironmentMapSamplesFollowTheMapDistribution) {
 // maps", render/device_scene.h): Rec. 709 luminance x sin(theta) for the light tracer, and for
 // bdpt and pt the luminance's excess over the map's mean radiance (texels weighted by sin theta),
 // so that the texels at or below the mean are never sampled (on this map 204 of the 512 texels
-// are above it: the spot and the brighter upper rows). Each weighting is checked against the texels that
-// the kernel's Sample_Li picks (2^18 draws, chi-square; a sample in a texel of weight 0 fails
-// at once); the other rule is rejected as well, so the test tells the two apart.
+// are above it: the spot and the brighter upper rows). Each weighting is checked against the
+// texels that the kernel's Sample_Li picks (2^18 draws, chi-square; a sample in a texel of
+// weight 0 fails at once); the other rule is rejected as well, so the test tells the two apart.
 std::vector<double> documented_env_weights(const DeviceScene& ds, EnvironmentSampling how) {
     const int w = ds.info.env_width, h = ds.info.env_height;
     auto lum = [&](int x, int y) {

@@ -6,8 +6,9 @@
  * have had — x_k .. x_t reversed, with forward densities computed from the light side and
  * reverse densities taken from the camera walk — and calls mis_weight. The weights of the
  * strategies that can produce the path (enabled, joining two non-specular vertices, and with a
- * light that emits toward the path at a density above 0) must add up to 1. With media, the reversed vertices swap their segments' distance densities and
- * the connection's are those of the camera walk's segment it replaces.
+ * light that emits toward the path at a density above 0) must add up to 1. With media, the
+ * reversed vertices swap their segments' distance densities and the connection's are those of
+ * the camera walk's segment it replaces.
  *
  * out[gid] = (largest |sum - 1| over the item's paths, number of paths checked). */
 #include "connect.h"
