@@ -169,9 +169,7 @@ struct TestScene {
 
     TestScene(const Scene& scene, int width, int height, Integrator integrator = Integrator::Bdpt,
               int max_depth = 5)
-        : ds(build_device_scene(scene, width, height,
-                                integrator == Integrator::Lt ? EnvironmentSampling::Luminance
-                                                             : EnvironmentSampling::Compensated)) {
+        : ds(build_device_scene(scene, width, height, environment_sampling_for(integrator))) {
         defines = kernel_defines(ds, integrator, max_depth);
         buffers = std::make_unique<SceneBuffers>(test_device().context(), ds);
     }

@@ -19,9 +19,7 @@ struct MisSums {
 
 MisSums mis_sums(const Scene& scene, Integrator integrator, int max_depth, int size, int passes,
                  float light_subpaths = 1.0f, bool inner_connections = true, bool light_to_lens = true) {
-    DeviceScene ds = build_device_scene(scene, size, size,
-                                        integrator == Integrator::Lt ? EnvironmentSampling::Luminance
-                                                                     : EnvironmentSampling::Compensated);
+    DeviceScene ds = build_device_scene(scene, size, size, environment_sampling_for(integrator));
     DeviceContext& device = test_device();
     const ProgramBuild& build = device.program("kernels/mis_test.cl", kernel_defines(ds, integrator, max_depth));
     SceneBuffers buffers(device.context(), ds);

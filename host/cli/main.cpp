@@ -350,9 +350,7 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
     // Only an explicit --integrator lt renders with the light tracer alone: the pilot never picks
     // it where there is an environment, and a resumed render keeps its --integrator
     // (image_settings).
-    DeviceScene ds = build_device_scene(scene, width, height,
-                                        options.integrator == Integrator::Lt ? EnvironmentSampling::Luminance
-                                                                             : EnvironmentSampling::Compensated);
+    DeviceScene ds = build_device_scene(scene, width, height, environment_sampling_for(options.integrator));
     const double device_scene_seconds = seconds_since(device_scene_start);
     if (leader) {
         for (const std::string& w : ds.warnings) std::fprintf(stderr, "clbdpt: warning: %s\n", w.c_str());

@@ -12,6 +12,10 @@ const char* integrator_name(Integrator integrator) {
     }
 }
 
+EnvironmentSampling environment_sampling_for(Integrator integrator) {
+    return integrator == Integrator::Lt ? EnvironmentSampling::Luminance : EnvironmentSampling::Compensated;
+}
+
 Integrator parse_integrator(const std::string& name) {
     if (name == "bdpt") return Integrator::Bdpt;
     if (name == "pt") return Integrator::Pt;

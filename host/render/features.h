@@ -15,6 +15,10 @@ enum class Integrator { Bdpt = 0, Pt = 1, Lt = 2 };
 const char* integrator_name(Integrator integrator);
 Integrator parse_integrator(const std::string& name);  // throws Error
 
+// The environment map's sampling an integrator renders with (render/device_scene.h): by
+// luminance for the light tracer alone, which has no BSDF-sampled strategy; else compensated.
+EnvironmentSampling environment_sampling_for(Integrator integrator);
+
 enum class SamplerKind { Independent = 0, Sobol = 1, ZSobol = 2 };
 
 const char* sampler_name(SamplerKind sampler);
