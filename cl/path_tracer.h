@@ -146,7 +146,8 @@ inline void path_tracer_sample(const SceneData* scene, Rng* rng, float2 raster, 
         if (vertex_is_light(&v)) path_tracer_add(sum, path_tracer_emitter_hit(scene, &prev, &v, t), 0, t);
         if (v.type == VERTEX_LIGHT || i == MAX_DEPTH + 1) break;
         /* The vertex's draws (cl/sample_dimensions.h), all at once: the light sample's (light
-         * and point) for s = 1 and the bounce's (lobe, direction); the fourth lane repeats one. */
+         * and point) for s = 1 and the bounce's (lobe and Russian roulette, direction); the
+         * fourth lane repeats one. */
         uint light_draw = sample_draw_light_connection(t), bounce_draw = sample_draw_camera_bounce(i - 1);
         float4 ux, uy;
         rng_draws4(rng, (uint4)(light_draw, bounce_draw, bounce_draw + 1u, bounce_draw + 1u), &ux, &uy);
@@ -157,6 +158,7 @@ inline void path_tracer_sample(const SceneData* scene, Rng* rng, float2 raster, 
         if (!bsdf_sample(&b, v.wo, (float3)(ux.s1, ux.s2, uy.s2), TRANSPORT_RADIANCE, &bs) || is_black(bs.f)) break;
         pdf_fwd = bs.pdf;
         beta *= bs.f * (fabs(dot(bs.wi, v.ns)) / bs.pdf);
+        if (!bs.specular && !russian_roulette_continues(i - 1, scene->roulette_camera_from, 1.0f, uy.s1, &beta)) break;
         if (bs.specular) {
             /* A delta lobe has no density to compare with (seed 5.4.2). */
             v.delta = 1;

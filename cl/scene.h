@@ -27,6 +27,10 @@ typedef struct {
     const Camera* camera;
     const SceneInfo* info;
     uint* rays_traced; /* the work item's ray counter (closest-hit and shadow rays) */
+    /* Russian roulette's first bounce in camera and light subpaths (cl/russian_roulette.h):
+     * RenderParams' in the render kernel, RUSSIAN_ROULETTE_OFF in every other. */
+    int roulette_camera_from;
+    int roulette_light_from;
 } SceneData;
 
 /* The kernel arguments every light-transport kernel takes, in this order (the host sets them
@@ -73,6 +77,8 @@ inline SceneData scene_data(__global const BvhNode* nodes, __global const Triang
     s.camera = camera;
     s.info = info;
     s.rays_traced = rays;
+    s.roulette_camera_from = RUSSIAN_ROULETTE_OFF;
+    s.roulette_light_from = RUSSIAN_ROULETTE_OFF;
     return s;
 }
 

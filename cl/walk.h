@@ -8,6 +8,7 @@
 #define CLBDPT_WALK_H
 
 #include "rng.h"
+#include "russian_roulette.h"
 #include "sample_dimensions.h"
 #include "strategies.h"
 #include "vertex.h"
@@ -75,6 +76,8 @@ inline float3 direction_from(const PathVertex* prev, const PathVertex* v) {
 inline int random_walk(const SceneData* scene, Rng* rng, float3 o, float3 d, float3 beta, float pdf_dir,
                        int max_vertices, int mode, uint first_draw, PathVertex* path, int start) {
     const int end = start + max_vertices;
+    const float beta_start_max = max_channel(beta);
+    const int roulette_from = mode == TRANSPORT_RADIANCE ? scene->roulette_camera_from : scene->roulette_light_from;
     float pdf_fwd = pdf_dir;
     int i = start;
 #ifdef HAS_MEDIA
@@ -161,6 +164,7 @@ inline int random_walk(const SceneData* scene, Rng* rng, float3 o, float3 d, flo
         }
         float u_lobe = (bounce & 1) ? bounce_x.s2 : bounce_x.s0;
         float2 u_dir = (bounce & 1) ? (float2)(bounce_x.s3, bounce_y.s3) : (float2)(bounce_x.s1, bounce_y.s1);
+        float u_roulette = (bounce & 1) ? bounce_y.s2 : bounce_y.s0; /* the lobe draw's second value */
 #ifdef HAS_MEDIA
         if (vertex->type == VERTEX_MEDIUM) {
             /* The phase function is its own density, up to the isotropic shortcut of
@@ -169,6 +173,7 @@ inline int random_walk(const SceneData* scene, Rng* rng, float3 o, float3 d, flo
             float3 wi;
             pdf_fwd = sample_phase_hg(vertex->wo, g, u_dir, &wi);
             beta *= phase_hg(vertex->wo, wi, g) / pdf_fwd;
+            if (!russian_roulette_continues(bounce, roulette_from, beta_start_max, u_roulette, &beta)) break;
             o = vertex->p;
             d = wi;
             continue;
@@ -195,6 +200,7 @@ inline int random_walk(const SceneData* scene, Rng* rng, float3 o, float3 d, flo
             prev->pdf_rev = 0.0f;
         }
         beta *= correct_shading_normal(vertex, vertex->wo, bs.wi, mode);
+        if (!bs.specular && !russian_roulette_continues(bounce, roulette_from, beta_start_max, u_roulette, &beta)) break;
         o = offset_ray_origin(vertex->p, vertex->ng, vertex->p_error, bs.wi);
         d = bs.wi;
 #ifdef HAS_MEDIA

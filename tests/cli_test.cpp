@@ -323,9 +323,16 @@ TEST_F(CliTest, AutoChoosesTheStrategyMixByPilot) {
     nlohmann::json j = nlohmann::json::parse(in);
     ASSERT_TRUE(j.contains("strategy_pilot")) << j.dump(2);
     const nlohmann::json& p = j["strategy_pilot"];
-    // Three bdpt mixes, pt and lt: the lamp's room is all diffuse, without media.
-    ASSERT_EQ(p["candidates"].size(), 5u);
+    // Three bdpt mixes, pt and lt: the lamp's room is all diffuse, without media; and where the
+    // pilot chose a bdpt mix of them, that mix again with Russian roulette in its light subpaths.
+    ASSERT_GE(p["candidates"].size(), 5u);
+    ASSERT_LE(p["candidates"].size(), 6u);
     EXPECT_EQ(p["candidates"][4]["name"], "lt");
+    if (p["candidates"].size() == 6u) {
+        EXPECT_NE(p["candidates"][5]["name"].get<std::string>().find(", Russian roulette from light bounce 2"),
+                  std::string::npos)
+            << p.dump(2);
+    }
     double best_camera = 0;
     for (const nlohmann::json& c : p["candidates"])
         if (c["name"] != "lt") best_camera = std::max(best_camera, c["efficiency_transport_only"].get<double>());
@@ -402,9 +409,16 @@ TEST_F(CliTest, AutoLeavesOutPtWhereItMissesLight) {
     std::ifstream in(out("auto.json"));
     nlohmann::json j = nlohmann::json::parse(in);
     ASSERT_TRUE(j.contains("strategy_pilot")) << j.dump(2);
-    ASSERT_EQ(j["strategy_pilot"]["candidates"].size(), 2u) << "full bdpt and half its light subpaths";
-    for (const nlohmann::json& c : j["strategy_pilot"]["candidates"])
+    // Full bdpt and half its light subpaths, and the one chosen of the two again with Russian
+    // roulette in its light subpaths.
+    const nlohmann::json& candidates = j["strategy_pilot"]["candidates"];
+    ASSERT_EQ(candidates.size(), 3u) << candidates.dump(2);
+    for (const nlohmann::json& c : candidates) {
         EXPECT_EQ(c["name"].get<std::string>().find("bdpt"), 0u) << c.dump();
+        EXPECT_EQ(c["name"].get<std::string>().find("no inner connections"), std::string::npos) << c.dump();
+    }
+    EXPECT_NE(candidates[2]["name"].get<std::string>().find("Russian roulette from light bounce 2"), std::string::npos)
+        << candidates.dump(2);
     EXPECT_EQ(j["integrator"], "bdpt");
     EXPECT_EQ(j["inner_connections"], true);
     EXPECT_NE(j["adaptive"]["integrator"], "pt");

@@ -23,6 +23,9 @@ TEST_P(PathTracerRoutesOnScene, SameImageAsFromStoredSubpaths) {
     for (int max_depth : {1, 5})
         expect_pt_routes_agree(scene, max_depth, kPasses,
                                std::string(GetParam()) + " depth " + std::to_string(max_depth));
+    // Russian roulette from the second bounce on (cl/russian_roulette.h): both routes end the
+    // same paths, from the same draw.
+    expect_pt_routes_agree(scene, 5, kPasses, std::string(GetParam()) + " depth 5, roulette from bounce 1", 1);
 }
 
 // Glass and mirrors (cornell-specular), glossy plates and lights of four sizes

@@ -96,6 +96,43 @@ TEST(SceneAgreement, EnvironmentSampledByExcessAgreesWithLuminance) {
     EXPECT_THROW(Renderer(test_device(), by_excess, make_options(Integrator::Lt, kMaxDepth, 508)), Error);
 }
 
+// Russian roulette (cl/russian_roulette.h) keeps every integrator's expectation: with roulette
+// from the first bounce of both subpaths, as often as it can fire, pt, bdpt (full and without
+// inner connections) and lt agree with pt without roulette, on cornell-specular (glass, whose
+// 1/eta^2 inside must not count as a throughput's loss, and depth 8) and lamp-ceiling (light
+// that arrives by way of the ceiling). Same regions and tolerance as above. A roulette that did
+// not divide the throughput by the probability of going on would make these images 10-40% dark.
+TEST(SceneAgreement, RussianRouletteKeepsTheImage) {
+    for (const char* name : {"cornell-specular", "lamp-ceiling"}) {
+        const std::string path = scene_path(name);
+        if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " does not exist";
+        const Scene loaded = load_scene(path);
+        const DeviceScene scene = build_device_scene(loaded, kFilm, kFilm);
+        const bool lt = std::string(name) == "lamp-ceiling";
+        const int depth = lt ? kMaxDepth : 8;
+        const int passes = scaled_passes(64);
+        RenderOptions off = make_options(Integrator::Pt, depth, 601);
+        off.roulette_camera_from = off.roulette_light_from = kRouletteOff;
+        RegionStats reference = render_stats_or_fail(scene, off, passes, kBlocks, "pt without roulette");
+        auto with_roulette = [&](Integrator integrator, bool inner_connections, uint32_t seed) {
+            RenderOptions o = make_options(integrator, depth, seed);
+            o.roulette_camera_from = o.roulette_light_from = 0;
+            o.inner_connections = inner_connections;
+            return o;
+        };
+        std::vector<std::pair<std::string, RenderOptions>> cases = {
+            {"pt", with_roulette(Integrator::Pt, true, 602)},
+            {"bdpt", with_roulette(Integrator::Bdpt, true, 603)},
+            {"bdpt without inner connections", with_roulette(Integrator::Bdpt, false, 604)}};
+        if (lt) cases.push_back({"lt", with_roulette(Integrator::Lt, true, 605)});
+        for (const auto& [what, options] : cases) {
+            const std::string label = std::string(name) + ": " + what + " with roulette from bounce 0";
+            RegionStats rendered = render_stats_or_fail(scene, options, passes, kBlocks, label);
+            expect_agree(rendered, reference, kSigmas, label + " vs pt without roulette");
+        }
+    }
+}
+
 INSTANTIATE_TEST_SUITE_P(Bundled, SceneAgreementTest,
                          ::testing::Values(AgreementCase{"cornell-specular", false, 96},
                                            AgreementCase{"lamp-ceiling", true, 64},

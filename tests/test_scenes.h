@@ -520,8 +520,10 @@ inline std::string options_name(const RenderOptions& o) {
 // from a stored camera subpath, as bdpt makes them (RenderOptions::pt_from_subpaths): the
 // same draws, vertex functions and order of sums give the same film bit for bit, and the same
 // number of rays. Sobol sampler, `passes` passes at max depth `max_depth`.
-inline void expect_pt_routes_agree(const DeviceScene& scene, int max_depth, int passes, const std::string& what) {
+inline void expect_pt_routes_agree(const DeviceScene& scene, int max_depth, int passes, const std::string& what,
+                                   int roulette_camera_from = kRouletteCameraFrom) {
     RenderOptions options = make_options(Integrator::Pt, max_depth, 5, SamplerKind::Sobol);
+    options.roulette_camera_from = roulette_camera_from;
     Renderer one_vertex_at_a_time(test_device(), scene, options);
     Film a(scene.camera.width, scene.camera.height);
     one_vertex_at_a_time.render_passes(a, 0, passes);

@@ -51,6 +51,8 @@ __kernel void render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, __global float
     if (gid >= params.pixel_count) return;
     uint rays_traced = 0;
     SceneData scene = SCENE_DATA_FROM_KERNEL_ARGS(&rays_traced);
+    scene.roulette_camera_from = params.roulette_camera_from;
+    scene.roulette_light_from = params.roulette_light_from;
 
     int item = params.first_pixel + gid;
     int pixel = params.run_listed ? run_pixels[params.run_pixel + item % params.run_length]

@@ -200,6 +200,9 @@ typedef struct {
 
 /* ---- Per-launch parameters and outputs ------------------------------------------------- */
 
+/* A first bounce of Russian roulette beyond any path's depth. */
+#define RUSSIAN_ROULETTE_OFF 0x40000000
+
 typedef struct {
     clbdpt_int width;        /* image size in pixels */
     clbdpt_int height;
@@ -236,7 +239,11 @@ typedef struct {
     /* run_listed = 1: the run's pixels are run_pixels[run_pixel + j], j < run_length (the
      * kernel's pixel list argument), scattered over the film, instead of consecutive. */
     clbdpt_int run_listed;
-    clbdpt_int pad0, pad1, pad2;
+    /* Russian roulette (cl/russian_roulette.h): the bounce of a camera and of a light subpath
+     * from which it may end the subpath; RUSSIAN_ROULETTE_OFF: never. */
+    clbdpt_int roulette_camera_from;
+    clbdpt_int roulette_light_from;
+    clbdpt_int pad0;
 } RenderParams;
 
 /* Work items of a pass with pixel_stride `stride` over a width x height film. */

@@ -50,6 +50,7 @@ struct RenderArgs {
     float light_subpaths = -1;  // < 0: not given
     std::string connections;    // "on", "off" or empty
     std::string light_samples = "auto";
+    std::string russian_roulette = "auto";  // auto, off or a bounce
     std::string sampler;  // empty: sobol
     std::string adaptive = "on";
     std::string aov;
@@ -210,11 +211,13 @@ std::string choose_strategy_mix(DeviceContext& device, const DeviceScene& ds, Re
     options->integrator = c.integrator;
     options->light_subpaths = c.light_subpaths;
     options->inner_connections = c.inner_connections;
+    options->roulette_light_from = c.roulette_light_from;
     // A budget the pilot spent still gets one pass (render_image always renders one).
     if (timed) options->time_budget = std::max(1e-9, options->time_budget - pilot->seconds);
     for (auto& r : pilot->renderers)
         if (r->options().integrator == c.integrator) {
             r->set_strategy_mix(c.light_subpaths, c.inner_connections);
+            r->set_light_roulette(c.roulette_light_from);
             renderers->push_back(std::move(r));
         }
     char buf[160];
@@ -237,6 +240,7 @@ std::string image_settings(const RenderArgs& args, const RenderOptions& options)
     std::ostringstream line;
     line << "integrator=" << args.integrator << " light_subpaths=" << args.light_subpaths
          << " connections=" << args.connections << " light_samples=" << light_sampling_name(options.light_sampling)
+         << " russian_roulette=" << args.russian_roulette
          << " sampler=" << sampler_name(options.sampler)
          << " max_depth=" << options.max_depth << " seed=" << options.seed << " all_features=" << options.all_features
          << " strategy_images=" << int(options.strategy_images) << " debug_nan_pixel=" << options.debug_nan_pixel;
@@ -266,7 +270,7 @@ Checkpoint read_checkpoint_to_resume(const std::string& path, const CheckpointIn
         throw Error("checkpoint '" + path + "' holds " + std::to_string(c.film.spp) + " spp, more than --spp " +
                     std::to_string(options.spp));
     if (c.info.integrator < int(Integrator::Bdpt) || c.info.integrator > int(Integrator::Lt) ||
-        !(c.info.light_subpaths >= 0.0f && c.info.light_subpaths <= 1.0f))
+        !(c.info.light_subpaths >= 0.0f && c.info.light_subpaths <= 1.0f) || c.info.roulette_light_from < 0)
         throw Error("checkpoint '" + path + "' is not usable: its strategy mix is damaged");
     return c;
 }
@@ -313,6 +317,14 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
     if (args.light_subpaths >= 0) options.light_subpaths = args.light_subpaths;
     if (!args.connections.empty()) options.inner_connections = args.connections == "on";
     options.light_sampling = parse_light_sampling(args.light_samples);
+    // Russian roulette (render/features.h): auto = camera subpaths after 3 bounces, light
+    // subpaths as the pilot chooses (else none); off; or both subpaths from bounce N.
+    options.roulette_light_by_pilot = args.russian_roulette == "auto";
+    if (args.russian_roulette == "off") {
+        options.roulette_camera_from = options.roulette_light_from = kRouletteOff;
+    } else if (args.russian_roulette != "auto") {
+        options.roulette_camera_from = options.roulette_light_from = parse_roulette_bounce(args.russian_roulette);
+    }
     // Padded Sobol by default, by measurement (README "Samplers"): ZSobol lowers bdpt's error
     // where the light image dominates (the Cornell box) but costs more per sample than it gains
     // where light subpaths and connections carry the image (lamp-ceiling), and pt gains nothing.
@@ -404,6 +416,7 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
         options.integrator = Integrator(resumed->info.integrator);
         options.light_subpaths = resumed->info.light_subpaths;
         options.inner_connections = resumed->info.inner_connections != 0;
+        options.roulette_light_from = resumed->info.roulette_light_from;
     }
 
     if (aov >= 0) {
@@ -439,11 +452,13 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
             ? choose_strategy_mix(device, ds, &options, adaptive, &pilot, &pilot_stats, &renderers)
             : "";
     // Every process renders with the leader's integrator and strategy mix.
-    RenderPlan plan{int(options.integrator), options.light_subpaths, options.inner_connections ? 1 : 0};
+    RenderPlan plan{int(options.integrator), options.light_subpaths, options.inner_connections ? 1 : 0,
+                    options.roulette_light_from};
     cluster.share_plan(&plan);
     options.integrator = Integrator(plan.integrator);
     options.light_subpaths = plan.light_subpaths;
     options.inner_connections = plan.inner_connections != 0;
+    options.roulette_light_from = plan.roulette_light_from;
     const bool run_pilot = pilot.seconds > 0;
     int failing_device = -1, fail_after = -1;
     if (!args.debug_fail_device.empty() &&
@@ -489,6 +504,7 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
     checkpoint_info.integrator = int(options.integrator);
     checkpoint_info.light_subpaths = options.light_subpaths;
     checkpoint_info.inner_connections = options.inner_connections ? 1 : 0;
+    checkpoint_info.roulette_light_from = options.roulette_light_from;
     RenderSchedule schedule;
     schedule.resume = resumed ? &resumed->film : nullptr;
     schedule.stop_requested = [] { return interrupt_signal() != 0; };
@@ -553,7 +569,7 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
         st.first_pass_seconds += pilot.seconds;
     }
     const std::string strategy_mix = describe_strategy_mix(options.integrator, options.light_subpaths,
-                                                           options.inner_connections);
+                                                           options.inner_connections, options.roulette_light_from);
     // Loading, BVH, kernel builds (or cache loads) and the first pass: what a user waits for.
     const double first_pass_seconds = seconds_before_passes + st.first_pass_seconds;
     bar.finish();
@@ -584,6 +600,13 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
         j["light_subpaths"] = options.integrator == Integrator::Bdpt ? options.light_subpaths
                               : options.integrator == Integrator::Lt ? 1.0f : 0.0f;
         j["inner_connections"] = options.integrator == Integrator::Bdpt && options.inner_connections;
+        // Where Russian roulette starts in each kind of subpath (the integrator traces).
+        j["russian_roulette"] = {
+            {"camera_subpaths", options.integrator == Integrator::Lt ? "none traced"
+                                                                     : roulette_name(options.roulette_camera_from)},
+            {"light_subpaths", options.integrator == Integrator::Pt || options.light_subpaths == 0.0f
+                                   ? "none traced"
+                                   : roulette_name(options.roulette_light_from)}};
         // What the light samples did: a sample of every light group, or one light each.
         j["light_samples"] = std::find(st.defines.begin(), st.defines.end(), "NEE_EVERY_LIGHT") != st.defines.end()
                                  ? "every"
@@ -794,6 +817,19 @@ int main(int argc, char** argv) {
                        "together, every other light alone) in a scene without media that has 2 to 8 groups, else "
                        "one light sample; every or one fixes it")
         ->check(CLI::IsMember({"auto", "every", "one"}));
+    render->add_option("--russian-roulette", args.russian_roulette,
+                       "auto (default): camera subpaths may end by Russian roulette after 3 bounces (pbrt-v3's path "
+                       "tracer's rule), light subpaths from their 2nd bounce where the pilot finds it pays, else never; "
+                       "off; or N: both subpaths from bounce N on (0: the first)")
+        ->check([](const std::string& v) {
+            if (v == "auto" || v == "off") return std::string();
+            try {
+                parse_roulette_bounce(v);
+                return std::string();
+            } catch (const Error& e) {
+                return std::string(e.what());
+            }
+        });
     render->add_option("--sampler", args.sampler,
                        "sobol (default): padded Owen-scrambled Sobol, every decision stratified over a pixel's "
                        "samples; zsobol: the same points ordered over the image in Morton order, stratified over "

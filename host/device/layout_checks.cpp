@@ -138,6 +138,8 @@ CLBDPT_CHECK_FIELD(RenderParams, run_pixel, 52);
 CLBDPT_CHECK_FIELD(RenderParams, run_length, 56);
 CLBDPT_CHECK_FIELD(RenderParams, light_to_lens, 60);
 CLBDPT_CHECK_FIELD(RenderParams, run_listed, 64);
+CLBDPT_CHECK_FIELD(RenderParams, roulette_camera_from, 68);
+CLBDPT_CHECK_FIELD(RenderParams, roulette_light_from, 72);
 
 CLBDPT_CHECK_STRUCT(SplatRecord, 16, 4);
 CLBDPT_CHECK_FIELD(SplatRecord, r, 0);

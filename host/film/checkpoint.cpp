@@ -14,7 +14,9 @@ namespace clbdpt {
 namespace {
 
 constexpr char kMagic[8] = {'C', 'L', 'B', 'D', 'P', 'T', 'C', 'K'};
-constexpr uint32_t kVersion = 1;
+// 2: the light subpaths' Russian roulette joined the strategy mix (a checkpoint of version 1
+// was rendered without roulette, which its resumed passes could not match).
+constexpr uint32_t kVersion = 2;
 
 // Film sizes beyond these are not something clbdpt writes (the command line caps the film at
 // 32768 on a side); a header claiming more is damage, refused before allocating for it.
@@ -30,11 +32,13 @@ struct Header {
     int32_t integrator;
     float light_subpaths;
     int32_t inner_connections;
+    int32_t roulette_light_from;
+    int32_t reserved;
     int32_t strategy_stride;  // 0: no strategy sums
     uint64_t strategy_values;
     uint64_t settings_bytes;
 };
-static_assert(sizeof(Header) == 64, "the checkpoint header is written as it lies in memory");
+static_assert(sizeof(Header) == 72, "the checkpoint header is written as it lies in memory");
 
 void append(std::string* out, const void* data, size_t bytes) { out->append(static_cast<const char*>(data), bytes); }
 
@@ -51,6 +55,7 @@ void write_checkpoint(const std::string& path, const CheckpointInfo& info, const
     h.integrator = info.integrator;
     h.light_subpaths = info.light_subpaths;
     h.inner_connections = info.inner_connections;
+    h.roulette_light_from = info.roulette_light_from;
     h.strategy_stride = film.strategy_sum.empty() ? 0 : film.strategy_stride;
     h.strategy_values = film.strategy_sum.size();
     h.settings_bytes = info.settings.size();
@@ -104,6 +109,7 @@ Checkpoint read_checkpoint(const std::string& path) {
     c.info.integrator = h.integrator;
     c.info.light_subpaths = h.light_subpaths;
     c.info.inner_connections = h.inner_connections;
+    c.info.roulette_light_from = h.roulette_light_from;
     c.film = Film(h.width, h.height);
     c.film.spp = h.spp;
     const char* p = bytes.data() + sizeof h;

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "film/film.h"
+#include "shared/types.h"
 
 namespace clbdpt {
 
@@ -29,6 +30,7 @@ struct CheckpointInfo {
     int32_t integrator = 0;
     float light_subpaths = 1.0f;
     int32_t inner_connections = 1;
+    int32_t roulette_light_from = RUSSIAN_ROULETTE_OFF;  // Russian roulette in light subpaths
 };
 
 struct Checkpoint {

@@ -24,6 +24,7 @@ struct RenderPlan {
     int integrator = 0;
     float light_subpaths = 1.0f;
     int inner_connections = 1;
+    int roulette_light_from = kRouletteOff;
 };
 
 class Cluster {

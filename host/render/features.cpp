@@ -12,6 +12,23 @@ const char* integrator_name(Integrator integrator) {
     }
 }
 
+std::string roulette_name(int from_bounce) {
+    return from_bounce >= kRouletteOff ? "off" : "from bounce " + std::to_string(from_bounce);
+}
+
+int parse_roulette_bounce(const std::string& text) {
+    size_t used = 0;
+    int bounce = -1;
+    try {
+        bounce = std::stoi(text, &used);
+    } catch (const std::exception&) {
+        used = 0;
+    }
+    if (used == 0 || used != text.size() || bounce < 0 || bounce > 1024)
+        throw Error("--russian-roulette takes auto, off or a bounce from 0 to 1024, not '" + text + "'");
+    return bounce;
+}
+
 EnvironmentSampling environment_sampling_for(Integrator integrator) {
     return integrator == Integrator::Lt ? EnvironmentSampling::Luminance : EnvironmentSampling::Compensated;
 }

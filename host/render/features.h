@@ -19,6 +19,22 @@ Integrator parse_integrator(const std::string& name);  // throws Error
 // luminance for the light tracer alone, which has no BSDF-sampled strategy; else compensated.
 EnvironmentSampling environment_sampling_for(Integrator integrator);
 
+// Russian roulette (cl/russian_roulette.h): the bounce of a subpath from which it may end it.
+constexpr int kRouletteOff = RUSSIAN_ROULETTE_OFF;
+// Camera subpaths by default: after 3 bounces, pbrt-v3's path tracer's rule. On the bundled
+// scenes pt's efficiency rose 1.01-1.12x by it (README "Russian roulette"); from bounce 1 or 2 it
+// fell to 0.56-0.9x on point-spot and the Cornell box, whose second and third bounces carry much
+// of the light.
+constexpr int kRouletteCameraFrom = 4;
+// Light subpaths: the strategy pilot tries its chosen bdpt mix with roulette from this bounce
+// (render/strategy_pilot.h); else light subpaths have none.
+constexpr int kRouletteLightFromPilot = 2;
+
+// "off", or the first bounce, as the summary and --stats say it.
+std::string roulette_name(int from_bounce);
+// A first bounce given as text (0 .. 1024): throws Error naming it otherwise.
+int parse_roulette_bounce(const std::string& text);
+
 enum class SamplerKind { Independent = 0, Sobol = 1, ZSobol = 2 };
 
 const char* sampler_name(SamplerKind sampler);

@@ -52,6 +52,8 @@ Renderer::Renderer(DeviceContext& device, const DeviceScene& scene, const Render
         scene.env_sampling != EnvironmentSampling::Luminance)
         throw Error("internal: the light tracer needs the environment map sampled by luminance (render/device_scene.h)");
     set_strategy_mix(options.light_subpaths, options.inner_connections);  // validates it
+    set_light_roulette(options.roulette_light_from);
+    if (options.roulette_camera_from < 0) throw Error("Russian roulette's first bounce must be >= 0");
     if (options.sampler == SamplerKind::ZSobol) {
         // ZSobol orders a known number of samples per pixel (cl/rng.h).
         if (options.time_budget > 0) throw Error("--sampler zsobol needs --spp: it orders a known number of samples");
@@ -153,6 +155,11 @@ void Renderer::reset_counters() {
     stats_.first_dropped.clear();
 }
 
+void Renderer::set_light_roulette(int from_bounce) {
+    if (from_bounce < 0) throw Error("Russian roulette's first bounce must be >= 0");
+    options_.roulette_light_from = from_bounce;
+}
+
 void Renderer::set_strategy_mix(float light_subpaths, bool inner_connections) {
     if (!(light_subpaths >= 0.0f && light_subpaths <= 1.0f)) throw Error("light subpaths per sample must lie in [0, 1]");
     options_.light_subpaths = light_subpaths;
@@ -179,6 +186,8 @@ RenderParams Renderer::batch_params(const PassSpec& pass, int first_item, int it
     params.light_subpaths = bdpt ? options_.light_subpaths : 1.0f;
     params.inner_connections = bdpt ? (options_.inner_connections ? 1 : 0) : 1;
     params.light_to_lens = uses_light_to_lens(scene_) ? 1 : 0;
+    params.roulette_camera_from = options_.roulette_camera_from;
+    params.roulette_light_from = options_.roulette_light_from;
     return params;
 }
 

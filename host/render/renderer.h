@@ -33,6 +33,14 @@ struct RenderOptions {
     // sample (0 .. 1) and whether s >= 2, t >= 2 connections are made. pt and lt ignore it.
     float light_subpaths = 1.0f;
     bool inner_connections = true;
+    // Russian roulette's first bounce in camera and in light subpaths (render/features.h,
+    // cl/russian_roulette.h; kRouletteOff: none). The light subpaths' is part of the strategy
+    // mix: the pilot chooses it with the rest.
+    int roulette_camera_from = kRouletteCameraFrom;
+    int roulette_light_from = kRouletteOff;
+    // Whether the strategy pilot may choose roulette in the light subpaths of its bdpt mix
+    // (render/strategy_pilot.h); the main render takes roulette_light_from from its choice.
+    bool roulette_light_by_pilot = true;
     LightSampling light_sampling = LightSampling::Auto;  // how light samples choose lights
     uint32_t seed = 0;
     bool all_features = false;  // build the unspecialised kernel
@@ -155,6 +163,7 @@ public:
 
     // Changes the bdpt strategy mix for the passes that follow (the efficiency pilot).
     void set_strategy_mix(float light_subpaths, bool inner_connections);
+    void set_light_roulette(int from_bounce);
     const std::shared_ptr<SceneBuffers>& scene_buffers() const { return scene_buffers_; }
     const RenderOptions& options() const { return options_; }
 

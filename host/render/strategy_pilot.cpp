@@ -353,13 +353,18 @@ std::string candidates_left_out(const DeviceScene& scene) {
     return std::string("pt and bdpt without inner connections left out: they ") + kDeltaLightSpecularShortfall;
 }
 
-std::string describe_strategy_mix(Integrator integrator, float light_subpaths, bool inner_connections) {
-    if (integrator != Integrator::Bdpt) return integrator_name(integrator);
+std::string describe_strategy_mix(Integrator integrator, float light_subpaths, bool inner_connections,
+                                  int roulette_light_from) {
+    const std::string roulette =
+        roulette_light_from < kRouletteOff && integrator != Integrator::Pt && light_subpaths > 0.0f
+            ? ", Russian roulette from light bounce " + std::to_string(roulette_light_from)
+            : "";
+    if (integrator != Integrator::Bdpt) return integrator_name(integrator) + roulette;
     if (light_subpaths == 0.0f) return "bdpt without light subpaths (path tracing)";
     char buf[128];
     std::snprintf(buf, sizeof buf, "bdpt, %g light subpath%s per sample%s", double(light_subpaths),
                   light_subpaths == 1.0f ? "" : "s", inner_connections ? "" : ", no inner connections");
-    return buf;
+    return buf + roulette;
 }
 
 int choose_strategy_candidate(const std::vector<StrategyCandidate>& candidates) {
@@ -494,107 +499,132 @@ StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene
 
     const Clock::time_point start = Clock::now();
     // Sets x and y and pass c (see the header), each from its own seed; x and y share pixel
-    // positions. Round robin, so a change of the machine's load hits every candidate alike.
+    // positions.
     const uint32_t seed_x = options.seed ^ 0x6a09e667u, seed_y = options.seed ^ 0xbb67ae85u,
                    seed_c = options.seed ^ 0x3c6ef372u;
-    std::vector<std::vector<GridPass>> passes(size_t(k), std::vector<GridPass>(kPilotPassesPerCandidate,
-                                                                            GridPass(width, height, pilot.pixel_stride)));
+    std::vector<std::vector<GridPass>> passes;
     // Each candidate's fastest pass: load from elsewhere (the image I/O process loads its
     // libraries during the pilot) and a first pass's one-off costs only ever add time, and a
     // pass lasts 5-50 ms. With the mean of the three, a slow pass of full bdpt once handed
     // lamp-ceiling to the mix without inner connections, and a slow pass of pt handed sky to bdpt.
-    std::vector<double> seconds(size_t(k), 1e300);
-    for (int round = 0; round < kPilotPassesPerCandidate; ++round)
-        for (int i = 0; i < k; ++i) {
-            const StrategyCandidate& c = pilot.candidates[size_t(i)];
-            Renderer* r = by_integrator[int(c.integrator)];
-            if (c.integrator == Integrator::Bdpt) r->set_strategy_mix(c.light_subpaths, c.inner_connections);
-            PassSpec pass;
-            pass.pixel_stride = pilot.pixel_stride;
-            if (round < 2 * kPilotSetSize) {
-                // Sample j of set x or y: the sampler's j-th sample, so that a set is stratified
-                // as kPilotSetSize samples of the render are.
-                const uint32_t j = uint32_t(round % kPilotSetSize);
-                pass.seed = round < kPilotSetSize ? seed_x : seed_y;
-                pass.sample_index = pass.position_sample_index = j;
-                pass.position_seed = seed_x;
-            } else {
-                pass.seed = pass.position_seed = seed_c;
+    std::vector<double> seconds;
+    // The passes of candidates `first` on. Round robin, so a change of the machine's load hits
+    // every candidate alike.
+    auto run_passes = [&](int first) {
+        const int end = int(pilot.candidates.size());
+        passes.resize(size_t(end),
+                      std::vector<GridPass>(kPilotPassesPerCandidate, GridPass(width, height, pilot.pixel_stride)));
+        seconds.resize(size_t(end), 1e300);
+        for (int round = 0; round < kPilotPassesPerCandidate; ++round)
+            for (int i = first; i < end; ++i) {
+                const StrategyCandidate& c = pilot.candidates[size_t(i)];
+                Renderer* r = by_integrator[int(c.integrator)];
+                if (c.integrator == Integrator::Bdpt) r->set_strategy_mix(c.light_subpaths, c.inner_connections);
+                r->set_light_roulette(c.roulette_light_from);
+                PassSpec pass;
+                pass.pixel_stride = pilot.pixel_stride;
+                if (round < 2 * kPilotSetSize) {
+                    // Sample j of set x or y: the sampler's j-th sample, so that a set is
+                    // stratified as kPilotSetSize samples of the render are.
+                    const uint32_t j = uint32_t(round % kPilotSetSize);
+                    pass.seed = round < kPilotSetSize ? seed_x : seed_y;
+                    pass.sample_index = pass.position_sample_index = j;
+                    pass.position_seed = seed_x;
+                } else {
+                    pass.seed = pass.position_seed = seed_c;
+                }
+                const Clock::time_point pass_start = Clock::now();
+                const RenderedItems rendered = r->render_items(pass, 0, items);
+                seconds[size_t(i)] = std::min(seconds[size_t(i)], seconds_between(pass_start, Clock::now()));
+                passes[size_t(i)][size_t(round)].add(rendered);
+                stats->add_counts(rendered.counts);
             }
-            const Clock::time_point pass_start = Clock::now();
-            const RenderedItems rendered = r->render_items(pass, 0, items);
-            seconds[size_t(i)] = std::min(seconds[size_t(i)], seconds_between(pass_start, Clock::now()));
-            passes[size_t(i)][size_t(round)].add(rendered);
-            stats->add_counts(rendered.counts);
-        }
+    };
+    // Every candidate's variances, predicted error and efficiency, from all the passes so far.
+    auto evaluate = [&]() {
+        std::vector<SetVariances> transport;
+        for (int i = 0; i < int(pilot.candidates.size()); ++i) transport.push_back(set_variances(passes[size_t(i)], kPilotSetSize));
+        std::vector<const std::vector<double>*> camera_terms;
+        for (int i = 0; i < int(pilot.candidates.size()); ++i)
+            if (pilot.candidates[size_t(i)].integrator != Integrator::Lt)
+                camera_terms.push_back(&transport[size_t(i)].one_terms);
+        const std::vector<double> shared_tail = shared_tail_terms(camera_terms);
+        const std::vector<bool> rare_paths = rare_shared_pixels(camera_terms);
+        const double shared_counted = kSharedVarianceCounted * common_shared_variance(shared_tail, rare_paths, camera_terms);
 
-    std::vector<SetVariances> transport;
-    for (int i = 0; i < k; ++i) transport.push_back(set_variances(passes[size_t(i)], kPilotSetSize));
-    std::vector<const std::vector<double>*> camera_terms;
-    for (int i = 0; i < k; ++i)
-        if (pilot.candidates[size_t(i)].integrator != Integrator::Lt)
-            camera_terms.push_back(&transport[size_t(i)].one_terms);
-    const std::vector<double> shared_tail = shared_tail_terms(camera_terms);
-    const std::vector<bool> rare_paths = rare_shared_pixels(camera_terms);
-    const double shared_counted = kSharedVarianceCounted * common_shared_variance(shared_tail, rare_paths, camera_terms);
-
-    for (int i = 0; i < k; ++i) {
-        StrategyCandidate& c = pilot.candidates[size_t(i)];
-        const std::vector<GridPass>& f = passes[size_t(i)];
-        const SetVariances& t = transport[size_t(i)];
-        const GroupedVariance whole = one_sample_variance(f[0], f[2 * kPilotSetSize]);
-        const LightImageVariance light = light_image_variance(f);
-        c.variance_light_image = light.mean;
-        c.variance_transport = t.one.mean() + light.mean;
-        c.variance_transport_standard_error = std::hypot(t.one.standard_error(), light.standard_error);
-        // N x (variance of N samples' mean) = A + B / N: B is what stratification removes
-        // faster than 1/N. From N = 1 and N = kPilotSetSize.
-        const double n_set = kPilotSetSize;
-        c.variance_transport_stratified =
-            std::min(c.variance_transport, median_group_difference(t.one, t.set) * n_set / (n_set - 1.0));
-        // The candidate's own terms, less the shared tail and the rare shared paths; lt's terms
-        // were not compared (it has no camera subpath): it keeps them all.
-        std::vector<double> own_terms = t.one_terms;
-        if (c.integrator != Integrator::Lt)
-            for (size_t item = 0; item < size_t(items); ++item)
-                own_terms[item] = rare_paths[item] ? 0.0 : own_terms[item] - shared_tail[item];
-        GroupedVariance own;
-        for (int item = 0; item < items; ++item) own.add(item, own_terms[size_t(item)]);
-        const double own_hedge_error = standard_error_without_largest(own_terms, kHedgeLeavesOut);
-        c.variance_shared_tail = t.one.mean() - own.mean();
-        if (c.integrator != Integrator::Lt) c.variance_shared_counted = shared_counted;
-        c.variance_pixel = pixel_variance(whole, t.one);
-        c.seconds_per_pass = seconds[size_t(i)] * full_per_sparse;
-        const double n = time_budget > 0 && c.seconds_per_pass > 0 ? std::max(1.0, time_budget / c.seconds_per_pass)
-                                                                    : double(std::max(spp, 1));
-        c.predicted_spp = n;
-        // With adaptive sampling, what its plan leaves of the camera image's 1/N variance, for
-        // what extra samples (their time counts). The share is of the candidate's own terms,
-        // those it is applied to below, without the pixels left out above (which the plan
-        // rarely refines: a lone large sample does not raise its pixel's second pair term).
-        if (adaptive && spp > 0) {
-            const AdaptiveEffect a = adaptive_effect(own_terms, t.second_pair_terms, spp, light.mean);
-            c.adaptive_variance_left = a.variance_left;
-            c.adaptive_extra_share = a.extra_share;
+        for (int i = 0; i < int(pilot.candidates.size()); ++i) {
+            StrategyCandidate& c = pilot.candidates[size_t(i)];
+            const std::vector<GridPass>& f = passes[size_t(i)];
+            const SetVariances& t = transport[size_t(i)];
+            const GroupedVariance whole = one_sample_variance(f[0], f[2 * kPilotSetSize]);
+            const LightImageVariance light = light_image_variance(f);
+            c.variance_light_image = light.mean;
+            c.variance_transport = t.one.mean() + light.mean;
+            c.variance_transport_standard_error = std::hypot(t.one.standard_error(), light.standard_error);
+            // N x (variance of N samples' mean) = A + B / N: B is what stratification removes
+            // faster than 1/N. From N = 1 and N = kPilotSetSize.
+            const double n_set = kPilotSetSize;
+            c.variance_transport_stratified =
+                std::min(c.variance_transport, median_group_difference(t.one, t.set) * n_set / (n_set - 1.0));
+            // The candidate's own terms, less the shared tail and the rare shared paths; lt's terms
+            // were not compared (it has no camera subpath): it keeps them all.
+            std::vector<double> own_terms = t.one_terms;
+            if (c.integrator != Integrator::Lt)
+                for (size_t item = 0; item < size_t(items); ++item)
+                    own_terms[item] = rare_paths[item] ? 0.0 : own_terms[item] - shared_tail[item];
+            GroupedVariance own;
+            for (int item = 0; item < items; ++item) own.add(item, own_terms[size_t(item)]);
+            const double own_hedge_error = standard_error_without_largest(own_terms, kHedgeLeavesOut);
+            c.variance_shared_tail = t.one.mean() - own.mean();
+            if (c.integrator != Integrator::Lt) c.variance_shared_counted = shared_counted;
+            c.variance_pixel = pixel_variance(whole, t.one);
+            c.seconds_per_pass = seconds[size_t(i)] * full_per_sparse;
+            const double n = time_budget > 0 && c.seconds_per_pass > 0 ? std::max(1.0, time_budget / c.seconds_per_pass)
+                                                                        : double(std::max(spp, 1));
+            c.predicted_spp = n;
+            // With adaptive sampling, what its plan leaves of the camera image's 1/N variance, for
+            // what extra samples (their time counts). The share is of the candidate's own terms,
+            // those it is applied to below, without the pixels left out above (which the plan
+            // rarely refines: a lone large sample does not raise its pixel's second pair term).
+            if (adaptive && spp > 0) {
+                const AdaptiveEffect a = adaptive_effect(own_terms, t.second_pair_terms, spp, light.mean);
+                c.adaptive_variance_left = a.variance_left;
+                c.adaptive_extra_share = a.extra_share;
+            }
+            // Heavy tails (a path tracer's fireflies in fog) make a sparse grid's variance come out
+            // low more often than high, and a candidate chosen for a variance it does not have can
+            // cost 25x (without this, fog-spot at 128x128 got pt, 0.04-0.07x of bdpt's efficiency
+            // there, in one of three pilots); so the part of each transport variance that falls as
+            // 1/N (less the shared tail) counts kRiskStandardErrors standard errors high.
+            const double risky_transport =
+                std::max(0.0, (own.mean() - c.variance_transport_stratified) * c.adaptive_variance_left + light.mean) +
+                c.variance_shared_counted + kRiskStandardErrors * std::hypot(own_hedge_error, light.standard_error);
+            const double transport_mse = risky_transport / n + c.variance_transport_stratified / (n * n);
+            c.predicted_mse = transport_mse + c.variance_pixel / std::pow(n, kPixelVarianceExponent);
+            const double seconds = n * c.seconds_per_pass * (1.0 + c.adaptive_extra_share);
+            const double cost = c.predicted_mse * seconds;
+            c.efficiency = cost > 0 ? 1.0 / cost : 0.0;
+            const double transport_cost = transport_mse * seconds;
+            c.efficiency_transport_only = transport_cost > 0 ? 1.0 / transport_cost : 0.0;
         }
-        // Heavy tails (a path tracer's fireflies in fog) make a sparse grid's variance come out
-        // low more often than high, and a candidate chosen for a variance it does not have can
-        // cost 25x (without this, fog-spot at 128x128 got pt, 0.04-0.07x of bdpt's efficiency
-        // there, in one of three pilots); so the part of each transport variance that falls as
-        // 1/N (less the shared tail) counts kRiskStandardErrors standard errors high.
-        const double risky_transport =
-            std::max(0.0, (own.mean() - c.variance_transport_stratified) * c.adaptive_variance_left + light.mean) +
-            c.variance_shared_counted + kRiskStandardErrors * std::hypot(own_hedge_error, light.standard_error);
-        const double transport_mse = risky_transport / n + c.variance_transport_stratified / (n * n);
-        c.predicted_mse = transport_mse + c.variance_pixel / std::pow(n, kPixelVarianceExponent);
-        const double seconds = n * c.seconds_per_pass * (1.0 + c.adaptive_extra_share);
-        const double cost = c.predicted_mse * seconds;
-        c.efficiency = cost > 0 ? 1.0 / cost : 0.0;
-        const double transport_cost = transport_mse * seconds;
-        c.efficiency_transport_only = transport_cost > 0 ? 1.0 / transport_cost : 0.0;
-    }
+    };
+    run_passes(0);
+    evaluate();
     pilot.chosen = choose_strategy_candidate(pilot.candidates);
-    pilot.samples = uint64_t(items) * kPilotPassesPerCandidate * k;
+    // Russian roulette in the light subpaths of the chosen bdpt mix, tried as one candidate more:
+    // it paid 1.25x on cornell-specular, whose light subpaths serve the caustics alone, but it
+    // would thin out light that light subpaths carry (the light tracer on lamp-ceiling: 0.88x).
+    if (options.roulette_light_by_pilot && pilot.choice().integrator == Integrator::Bdpt &&
+        pilot.choice().light_subpaths > 0.0f) {
+        StrategyCandidate c = pilot.choice();
+        c.roulette_light_from = kRouletteLightFromPilot;
+        c.name = describe_strategy_mix(c.integrator, c.light_subpaths, c.inner_connections, c.roulette_light_from);
+        pilot.candidates.push_back(c);
+        run_passes(k);
+        evaluate();
+        pilot.chosen = choose_strategy_candidate(pilot.candidates);
+    }
+    pilot.samples = uint64_t(items) * kPilotPassesPerCandidate * pilot.candidates.size();
     // The renderers' counters (build time, profile; the passes' samples and rays went to `stats`
     // above) move into `stats`, so a renderer that goes on to the main render does not count the
     // pilot twice.

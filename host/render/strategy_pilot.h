@@ -53,6 +53,8 @@ struct StrategyCandidate {
     Integrator integrator = Integrator::Bdpt;
     float light_subpaths = 1.0f;
     bool inner_connections = true;
+    // Russian roulette's first bounce in the light subpaths (kRouletteOff: none).
+    int roulette_light_from = kRouletteOff;
     // Per pixel and channel, of one sample: within the pixel (transport) and from the position
     // in the pixel.
     double variance_transport = 0;
@@ -138,7 +140,9 @@ std::vector<StrategyCandidate> strategy_candidates(const DeviceScene& scene);
 std::string candidates_left_out(const DeviceScene& scene);
 
 // "bdpt, 0.5 light subpaths per sample, no inner connections", "pt", ...
-std::string describe_strategy_mix(Integrator integrator, float light_subpaths, bool inner_connections);
+// With Russian roulette in the light subpaths: ", Russian roulette from light bounce 2".
+std::string describe_strategy_mix(Integrator integrator, float light_subpaths, bool inner_connections,
+                                  int roulette_light_from = kRouletteOff);
 
 struct StrategyPilot {
     std::vector<StrategyCandidate> candidates;
