@@ -13,9 +13,10 @@
  *   SAMPLE_DRAW_TRACE_LIGHT_SUBPATH        whether a light subpath is traced (1D) 1
  *   SAMPLE_DRAW_LIGHT_POSITION             which light emits and where (2D)       1
  *   SAMPLE_DRAW_LIGHT_DIRECTION            emitted direction (2D)                 1
- *   sample_draw_camera_bounce(k)           lobe (1D), then direction (2D)         2 per bounce, MAX_DEPTH bounces
+ *   sample_draw_camera_bounce(k)           lobe and Russian roulette (2D), then   2 per bounce, MAX_DEPTH bounces
+ *                                          direction (2D)
  *                                          HAS_MEDIA: then the distance (2D)      3 per bounce, MAX_DEPTH + 1
- *   sample_draw_light_bounce(k)            lobe (1D), then direction (2D)         as the camera's
+ *   sample_draw_light_bounce(k)            as the camera's                        as the camera's
  *   sample_draw_lens_connection(s)         t = 1: lens point (2D)                 1 per s = 1 .. MAX_DEPTH + 1
  *   sample_draw_light_connection(t)        s = 1: light and point on it (2D)      1 per t = 2 .. MAX_DEPTH + 1
  *

@@ -62,7 +62,9 @@ inline float3 direction_from(const PathVertex* prev, const PathVertex* v) {
 /* Extends a subpath: path[start - 1] is the vertex the ray (o, d) leaves (the camera or the
  * light vertex), with throughput beta and solid-angle density pdf_dir of d. Writes at most
  * max_vertices vertices from path[start] on and returns how many; stops before tracing a ray
- * whose throughput is black. Bounce k draws from first_draw + SAMPLE_DRAWS_PER_BOUNCE * k.
+ * whose throughput is black, or where Russian roulette ends the subpath (cl/russian_roulette.h;
+ * its throughput's share is of beta, the one it starts with). Bounce k draws from
+ * first_draw + SAMPLE_DRAWS_PER_BOUNCE * k.
  *
  * Densities between surface vertices are evaluated from the vertex positions, exactly as every
  * MIS evaluation later does, not from the sampled direction: the ray leaves from an offset

@@ -121,7 +121,7 @@ def mitsuba_grid(mi, grid, sigma_t):
             "to_world": mi.ScalarTransform4f(m.tolist())}
 
 
-def mitsuba_scene(mi, desc, spp, seed, max_depth_offset=1):
+def mitsuba_scene(mi, desc, spp, seed, max_depth_offset=1, russian_roulette=False):
     c = desc["camera"]
     scale = _scene_scale(desc)
     sensor = {"type": "thinlens" if c["lens_radius"] > 0 else "perspective",
@@ -137,9 +137,12 @@ def mitsuba_scene(mi, desc, spp, seed, max_depth_offset=1):
         sensor["focus_distance"] = float(c["focus_distance"])
     depth = desc["max_depth"] + max_depth_offset  # Mitsuba counts the emitter vertex too
     media = desc.get("media") or {}
-    scene = {"type": "scene", "sensor": sensor,
-             # no Russian roulette, as clbdpt (rr_depth past max_depth never triggers)
-             "integrator": {"type": "volpath" if media else "path", "max_depth": depth, "rr_depth": depth + 1}}
+    # Without Russian roulette, rr_depth past max_depth never triggers; with it, Mitsuba's own
+    # default (rr_depth 5: from the 5th vertex on, the emitter's counted).
+    integrator = {"type": "volpath" if media else "path", "max_depth": depth}
+    if not russian_roulette:
+        integrator["rr_depth"] = depth + 1
+    scene = {"type": "scene", "sensor": sensor, "integrator": integrator}
     for name, m in media.items():
         sigma_t = [a + b for a, b in zip(m["sigma_a"], m["sigma_s"])]
         albedo = [b / t if t > 0 else 0.0 for b, t in zip(m["sigma_s"], sigma_t)]
@@ -206,7 +209,8 @@ def render_mitsuba(job, desc):
         passes.append(n)
         left -= n
     t0 = time.perf_counter()
-    scene = mi.load_dict(mitsuba_scene(mi, desc, passes[0], job["seed"]))
+    scene = mi.load_dict(mitsuba_scene(mi, desc, passes[0], job["seed"],
+                                       russian_roulette=bool(job.get("russian_roulette"))))
     t_load = time.perf_counter() - t0
     acc, done = None, 0
     for k, n in enumerate(passes):
