@@ -488,6 +488,48 @@ TEST_F(CliTest, LightSamplesOfEveryGroupOrOne) {
     EXPECT_FALSE(fs::exists(out("w.exr")));
 }
 
+// --russian-roulette: the default starts camera subpaths' roulette at bounce 4 and leaves light
+// subpaths to the pilot; off and N fix both kinds (N also for the pilot's candidates, whose
+// choice must not undo it); the stats say where each starts; a bad value is one error line.
+TEST_F(CliTest, RussianRouletteAsTheCommandLineSays) {
+    const std::string scene = std::string(CLBDPT_SCENES_DIR) + "/cornell-specular/cornell-specular.json";
+    auto render_with = [&](const std::string& flags, const std::string& name) {
+        CommandResult r = run("render " + scene + " --width 32 --height 32 " + flags + " -o " +
+                              out(name + ".exr") + " --stats " + out(name + ".json"));
+        EXPECT_EQ(r.status, 0) << r.output;
+        std::ifstream in(out(name + ".json"));
+        return nlohmann::json::parse(in);
+    };
+    const nlohmann::json pt = render_with("--spp 16 --integrator pt", "pt");
+    EXPECT_EQ(pt["russian_roulette"]["camera_subpaths"], "from bounce 4") << pt.dump(2);
+    EXPECT_EQ(pt["russian_roulette"]["light_subpaths"], "none traced") << pt.dump(2);
+    const nlohmann::json off = render_with("--spp 16 --integrator bdpt --russian-roulette off", "off");
+    EXPECT_EQ(off["russian_roulette"]["camera_subpaths"], "off") << off.dump(2);
+    EXPECT_EQ(off["russian_roulette"]["light_subpaths"], "off") << off.dump(2);
+    const nlohmann::json lt = render_with("--spp 16 --integrator lt --russian-roulette 3", "lt");
+    EXPECT_EQ(lt["russian_roulette"]["camera_subpaths"], "none traced") << lt.dump(2);
+    EXPECT_EQ(lt["russian_roulette"]["light_subpaths"], "from bounce 3") << lt.dump(2);
+    // Enough samples that the pilot runs (it may take a tenth of them).
+    const nlohmann::json fixed = render_with("--spp 400 --russian-roulette 1", "fixed");
+    EXPECT_EQ(fixed["russian_roulette"]["camera_subpaths"], "from bounce 1") << fixed.dump(2);
+    ASSERT_TRUE(fixed.contains("strategy_pilot")) << fixed.dump(2);
+    for (const nlohmann::json& c : fixed["strategy_pilot"]["candidates"]) {
+        const std::string name = c["name"].get<std::string>();
+        if (name != "pt") {
+            EXPECT_NE(name.find("Russian roulette from light bounce 1"), std::string::npos) << name;
+        }
+    }
+    if (fixed["integrator"] != "pt") {
+        EXPECT_EQ(fixed["russian_roulette"]["light_subpaths"], "from bounce 1");
+    }
+    for (const char* bad : {"sometimes", "-1", "2x", "99999"}) {
+        CommandResult wrong = run("render " + scene + " --spp 1 --russian-roulette " + bad + " -o " + out("w.exr"));
+        EXPECT_NE(wrong.status, 0) << bad;
+        EXPECT_NE(wrong.output.find("--russian-roulette"), std::string::npos) << wrong.output;
+        EXPECT_FALSE(fs::exists(out("w.exr")));
+    }
+}
+
 TEST_F(CliTest, DevicesListsAtLeastOne) {
     CommandResult r = run("devices");
     ASSERT_EQ(r.status, 0) << r.output;
@@ -500,7 +542,7 @@ TEST_F(CliTest, HelpDocumentsTheOptions) {
     EXPECT_EQ(r.status, 0);
     for (const char* opt : {"--output", "--spp", "--time", "--max-depth", "--seed", "--device", "--width", "--height",
                             "--stats", "--integrator", "--aov", "--light-subpaths", "--connections", "--light-samples",
-                            "--sampler"})
+                            "--russian-roulette", "--sampler"})
         EXPECT_NE(r.output.find(opt), std::string::npos) << opt;
 }
 

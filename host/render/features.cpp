@@ -25,7 +25,7 @@ int parse_roulette_bounce(const std::string& text) {
         used = 0;
     }
     if (used == 0 || used != text.size() || bounce < 0 || bounce > 1024)
-        throw Error("--russian-roulette takes auto, off or a bounce from 0 to 1024, not '" + text + "'");
+        throw Error("expected auto, off or a bounce from 0 to 1024, not '" + text + "'");
     return bounce;
 }
 

@@ -32,7 +32,8 @@ constexpr int kRouletteLightFromPilot = 2;
 
 // "off", or the first bounce, as the summary and --stats say it.
 std::string roulette_name(int from_bounce);
-// A first bounce given as text (0 .. 1024): throws Error naming it otherwise.
+// A first bounce given as text (0 .. 1024): throws Error naming it otherwise (the command line
+// prefixes the option's name).
 int parse_roulette_bounce(const std::string& text);
 
 enum class SamplerKind { Independent = 0, Sobol = 1, ZSobol = 2 };

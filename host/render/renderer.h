@@ -163,6 +163,7 @@ public:
 
     // Changes the bdpt strategy mix for the passes that follow (the efficiency pilot).
     void set_strategy_mix(float light_subpaths, bool inner_connections);
+    // The same for Russian roulette's first bounce in light subpaths (kRouletteOff: none).
     void set_light_roulette(int from_bounce);
     const std::shared_ptr<SceneBuffers>& scene_buffers() const { return scene_buffers_; }
     const RenderOptions& options() const { return options_; }

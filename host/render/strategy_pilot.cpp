@@ -474,6 +474,11 @@ StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene
     using Clock = std::chrono::steady_clock;
     StrategyPilot pilot;
     pilot.candidates = strategy_candidates(scene);
+    // Light roulette as the command line fixed it (with auto, none until tried below).
+    for (StrategyCandidate& c : pilot.candidates) {
+        c.roulette_light_from = options.roulette_light_from;
+        c.name = describe_strategy_mix(c.integrator, c.light_subpaths, c.inner_connections, c.roulette_light_from);
+    }
     pilot.spp = spp;
     const int k = int(pilot.candidates.size());
     const int width = scene.camera.width, height = scene.camera.height;
