@@ -28,7 +28,9 @@
 // variance / N overstates it 2.3x for pt and 4.6x for BDPT without inner connections. So the
 // squared error of N samples is predicted as A / N + B / N^2 + v_pixel / N^1.5, and the
 // candidate with the least error times time (N x seconds per sample, from its fastest pass) is
-// chosen: the inverse of Grittmann et al.'s efficiency. A leaves out the samples that every
+// chosen: the inverse of Grittmann et al.'s efficiency. Where that is a BDPT mix, the pilot runs
+// the mix once more with Russian roulette in its light subpaths (kRouletteLightFromPilot,
+// render/features.h) as one candidate more, and chooses again among all. A leaves out the samples that every
 // camera candidate has alike (shared_tail_terms), and the pixels where every camera candidate
 // met the same rare path (rare_shared_pixels), counting a share of their common part for every
 // camera candidate instead (common_shared_variance), and counts two standard errors high, so that a
