@@ -15,6 +15,12 @@ namespace clbdpt {
 
 namespace {
 
+// Russian roulette's first bounce, as RenderOptions holds it (kRouletteOff: none).
+int checked_roulette_bounce(int from_bounce) {
+    if (from_bounce < 0) throw Error("Russian roulette's first bounce must be >= 0");
+    return from_bounce;
+}
+
 // Output memory per launch is bounded: a camera float4 and max_depth + 1 splat records per item.
 constexpr size_t kMaxBatchBytes = size_t(256) << 20;
 constexpr int kMaxBatchItems = 1 << 18;
@@ -53,7 +59,7 @@ Renderer::Renderer(DeviceContext& device, const DeviceScene& scene, const Render
         throw Error("internal: the light tracer needs the environment map sampled by luminance (render/device_scene.h)");
     set_strategy_mix(options.light_subpaths, options.inner_connections);  // validates it
     set_light_roulette(options.roulette_light_from);
-    if (options.roulette_camera_from < 0) throw Error("Russian roulette's first bounce must be >= 0");
+    checked_roulette_bounce(options.roulette_camera_from);
     if (options.sampler == SamplerKind::ZSobol) {
         // ZSobol orders a known number of samples per pixel (cl/rng.h).
         if (options.time_budget > 0) throw Error("--sampler zsobol needs --spp: it orders a known number of samples");
@@ -155,10 +161,7 @@ void Renderer::reset_counters() {
     stats_.first_dropped.clear();
 }
 
-void Renderer::set_light_roulette(int from_bounce) {
-    if (from_bounce < 0) throw Error("Russian roulette's first bounce must be >= 0");
-    options_.roulette_light_from = from_bounce;
-}
+void Renderer::set_light_roulette(int from_bounce) { options_.roulette_light_from = checked_roulette_bounce(from_bounce); }
 
 void Renderer::set_strategy_mix(float light_subpaths, bool inner_connections) {
     if (!(light_subpaths >= 0.0f && light_subpaths <= 1.0f)) throw Error("light subpaths per sample must lie in [0, 1]");
