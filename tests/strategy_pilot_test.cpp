@@ -196,6 +196,23 @@ TEST(StrategyCandidates, PathTracingWhereItRendersEveryPath) {
     EXPECT_EQ(names(foggy), every_mix);
 }
 
+// Light roulette fixed on the command line (--russian-roulette N) goes with every candidate that
+// traces light subpaths, and their names say so; pt's name does not (it traces none).
+TEST(StrategyCandidates, CarryTheLightRoulette) {
+    std::string all;
+    for (const StrategyCandidate& c : strategy_candidates(scope_with(true, true), 3)) {
+        EXPECT_EQ(c.roulette_light_from, 3) << c.name;
+        all += c.name + "; ";
+    }
+    EXPECT_EQ(all,
+              "bdpt, 1 light subpath per sample, Russian roulette from light bounce 3; "
+              "bdpt, 0.5 light subpaths per sample, Russian roulette from light bounce 3; "
+              "bdpt, 1 light subpath per sample, no inner connections, Russian roulette from light bounce 3; "
+              "pt; lt, Russian roulette from light bounce 3; ");
+    for (const StrategyCandidate& c : strategy_candidates(scope_with(true, true)))
+        EXPECT_EQ(c.roulette_light_from, kRouletteOff) << c.name;
+}
+
 // The highest efficiency wins; light tracing only where it also beats every other candidate's
 // efficiency without v_pixel (the most that stratified samples and adaptive sampling might
 // credit a camera candidate with).

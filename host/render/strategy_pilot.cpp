@@ -323,7 +323,7 @@ CandidateScope candidate_scope(const DeviceScene& scene) {
     return scope;
 }
 
-std::vector<StrategyCandidate> strategy_candidates(const CandidateScope& scope) {
+std::vector<StrategyCandidate> strategy_candidates(const CandidateScope& scope, int roulette_light_from) {
     // Full bdpt; half the light subpaths (they cost as much as the camera subpath but pay off
     // only where light arrives indirectly); path tracing plus light tracing (caustics seen
     // directly, without the connections' cost); path tracing alone, with its own leaner kernel;
@@ -338,12 +338,15 @@ std::vector<StrategyCandidate> strategy_candidates(const CandidateScope& scope) 
     if (scope.without_inner_connections) c.emplace_back().inner_connections = false;
     if (scope.path_tracing) c.emplace_back().integrator = Integrator::Pt;
     if (scope.light_tracing) c.emplace_back().integrator = Integrator::Lt;
-    for (StrategyCandidate& s : c) s.name = describe_strategy_mix(s.integrator, s.light_subpaths, s.inner_connections);
+    for (StrategyCandidate& s : c) {
+        s.roulette_light_from = roulette_light_from;
+        s.name = describe_strategy_mix(s.integrator, s.light_subpaths, s.inner_connections, roulette_light_from);
+    }
     return c;
 }
 
-std::vector<StrategyCandidate> strategy_candidates(const DeviceScene& scene) {
-    return strategy_candidates(candidate_scope(scene));
+std::vector<StrategyCandidate> strategy_candidates(const DeviceScene& scene, int roulette_light_from) {
+    return strategy_candidates(candidate_scope(scene), roulette_light_from);
 }
 
 std::string candidates_left_out(const DeviceScene& scene) {
@@ -473,12 +476,8 @@ StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene
                                  int spp, double time_budget, bool adaptive, RenderStats* stats) {
     using Clock = std::chrono::steady_clock;
     StrategyPilot pilot;
-    pilot.candidates = strategy_candidates(scene);
     // Light roulette as the command line fixed it (with auto, none until tried below).
-    for (StrategyCandidate& c : pilot.candidates) {
-        c.roulette_light_from = options.roulette_light_from;
-        c.name = describe_strategy_mix(c.integrator, c.light_subpaths, c.inner_connections, c.roulette_light_from);
-    }
+    pilot.candidates = strategy_candidates(scene, options.roulette_light_from);
     pilot.spp = spp;
     const int k = int(pilot.candidates.size());
     const int width = scene.camera.width, height = scene.camera.height;

@@ -134,9 +134,10 @@ struct CandidateScope {
 CandidateScope candidate_scope(const DeviceScene& scene);
 
 // What the pilot can choose from, in its order: full bdpt, half its light subpaths, without inner
-// connections, pt, lt (those the scope allows).
-std::vector<StrategyCandidate> strategy_candidates(const CandidateScope& scope);
-std::vector<StrategyCandidate> strategy_candidates(const DeviceScene& scene);
+// connections, pt, lt (those the scope allows), each with Russian roulette in its light
+// subpaths from bounce roulette_light_from (kRouletteOff: none).
+std::vector<StrategyCandidate> strategy_candidates(const CandidateScope& scope, int roulette_light_from = kRouletteOff);
+std::vector<StrategyCandidate> strategy_candidates(const DeviceScene& scene, int roulette_light_from = kRouletteOff);
 
 // The candidates the scene leaves out and why, for the render's summary, or "".
 std::string candidates_left_out(const DeviceScene& scene);
