@@ -509,6 +509,13 @@ TEST_F(CliTest, RussianRouletteAsTheCommandLineSays) {
     const nlohmann::json lt = render_with("--spp 16 --integrator lt --russian-roulette 3", "lt");
     EXPECT_EQ(lt["russian_roulette"]["camera_subpaths"], "none traced") << lt.dump(2);
     EXPECT_EQ(lt["russian_roulette"]["light_subpaths"], "from bounce 3") << lt.dump(2);
+    // Each kind its own: what the pilot's candidate with light roulette renders, forced.
+    const nlohmann::json both = render_with("--spp 16 --integrator bdpt --russian-roulette 4,2", "both");
+    EXPECT_EQ(both["russian_roulette"]["camera_subpaths"], "from bounce 4") << both.dump(2);
+    EXPECT_EQ(both["russian_roulette"]["light_subpaths"], "from bounce 2") << both.dump(2);
+    const nlohmann::json light_off = render_with("--spp 16 --integrator bdpt --russian-roulette 0,off", "light_off");
+    EXPECT_EQ(light_off["russian_roulette"]["camera_subpaths"], "from bounce 0") << light_off.dump(2);
+    EXPECT_EQ(light_off["russian_roulette"]["light_subpaths"], "off") << light_off.dump(2);
     // Enough samples that the pilot runs (it may take a tenth of them).
     const nlohmann::json fixed = render_with("--spp 400 --russian-roulette 1", "fixed");
     EXPECT_EQ(fixed["russian_roulette"]["camera_subpaths"], "from bounce 1") << fixed.dump(2);
@@ -522,7 +529,7 @@ TEST_F(CliTest, RussianRouletteAsTheCommandLineSays) {
     if (fixed["integrator"] != "pt") {
         EXPECT_EQ(fixed["russian_roulette"]["light_subpaths"], "from bounce 1");
     }
-    for (const char* bad : {"sometimes", "-1", "2x", "99999"}) {
+    for (const char* bad : {"sometimes", "-1", "2x", "99999", "4,", ",2", "4,2,1", "auto,2", "4:2"}) {
         CommandResult wrong = run("render " + scene + " --spp 1 --russian-roulette " + bad + " -o " + out("w.exr"));
         EXPECT_NE(wrong.status, 0) << bad;
         EXPECT_NE(wrong.output.find("--russian-roulette"), std::string::npos) << wrong.output;

@@ -318,13 +318,11 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
     if (!args.connections.empty()) options.inner_connections = args.connections == "on";
     options.light_sampling = parse_light_sampling(args.light_samples);
     // Russian roulette (render/features.h): auto = camera subpaths after 3 bounces, light
-    // subpaths as the pilot chooses (else none); off; or both subpaths from bounce N.
-    options.roulette_light_by_pilot = args.russian_roulette == "auto";
-    if (args.russian_roulette == "off") {
-        options.roulette_camera_from = options.roulette_light_from = kRouletteOff;
-    } else if (args.russian_roulette != "auto") {
-        options.roulette_camera_from = options.roulette_light_from = parse_roulette_bounce(args.russian_roulette);
-    }
+    // subpaths as the pilot chooses (else none); off; both subpaths from bounce N; or each its own.
+    const RouletteSetting roulette = parse_russian_roulette(args.russian_roulette);
+    options.roulette_light_by_pilot = roulette.light_by_pilot;
+    options.roulette_camera_from = roulette.camera_from;
+    options.roulette_light_from = roulette.light_from;
     // Padded Sobol by default, by measurement (README "Samplers"): ZSobol lowers bdpt's error
     // where the light image dominates (the Cornell box) but costs more per sample than it gains
     // where light subpaths and connections carry the image (lamp-ceiling), and pt gains nothing.
@@ -820,11 +818,11 @@ int main(int argc, char** argv) {
     render->add_option("--russian-roulette", args.russian_roulette,
                        "auto (default): camera subpaths may end by Russian roulette after 3 bounces (pbrt-v3's path "
                        "tracer's rule), light subpaths from their 2nd bounce where the pilot finds it pays, else never; "
-                       "off; or N: both subpaths from bounce N on (0: the first)")
+                       "off; N: both subpaths from bounce N on (0: the first); or C,L: camera subpaths from bounce C, "
+                       "light subpaths from bounce L (each a bounce or off)")
         ->check([](const std::string& v) {
-            if (v == "auto" || v == "off") return std::string();
             try {
-                parse_roulette_bounce(v);
+                parse_russian_roulette(v);
                 return std::string();
             } catch (const Error& e) {
                 return std::string(e.what());

@@ -29,6 +29,29 @@ int parse_roulette_bounce(const std::string& text) {
     return bounce;
 }
 
+RouletteSetting parse_russian_roulette(const std::string& text) {
+    RouletteSetting s;
+    if (text == "auto") return s;
+    s.light_by_pilot = false;
+    auto bounce_or_off = [&](const std::string& part) {
+        if (part == "off") return kRouletteOff;
+        try {
+            return parse_roulette_bounce(part);
+        } catch (const Error&) {
+            throw Error("expected auto, off, a bounce from 0 to 1024 or two of them (camera,light; each a "
+                        "bounce or off), not '" + text + "'");
+        }
+    };
+    const size_t comma = text.find(',');
+    if (comma == std::string::npos) {
+        s.camera_from = s.light_from = bounce_or_off(text);
+    } else {
+        s.camera_from = bounce_or_off(text.substr(0, comma));
+        s.light_from = bounce_or_off(text.substr(comma + 1));
+    }
+    return s;
+}
+
 EnvironmentSampling environment_sampling_for(Integrator integrator) {
     return integrator == Integrator::Lt ? EnvironmentSampling::Luminance : EnvironmentSampling::Compensated;
 }

@@ -35,6 +35,16 @@ std::string roulette_name(int from_bounce);
 // A first bounce given as text (0 .. 1024): throws Error naming it otherwise (the command line
 // prefixes the option's name).
 int parse_roulette_bounce(const std::string& text);
+// --russian-roulette: auto (camera subpaths from kRouletteCameraFrom, light subpaths as the
+// pilot finds), off, N (both kinds from bounce N), or C,L (camera subpaths from C, light
+// subpaths from L, each a bounce or off: what a pilot's candidate with light roulette renders,
+// forced, is "4,2"). Throws Error naming the text otherwise.
+struct RouletteSetting {
+    int camera_from = kRouletteCameraFrom;
+    int light_from = kRouletteOff;
+    bool light_by_pilot = true;
+};
+RouletteSetting parse_russian_roulette(const std::string& text);
 
 enum class SamplerKind { Independent = 0, Sobol = 1, ZSobol = 2 };
 
