@@ -205,8 +205,11 @@ std::string choose_strategy_mix(DeviceContext& device, const DeviceScene& ds, Re
     const size_t candidates = strategy_candidates(ds).size();
     if (timed ? options->time_budget < kPilotMinBudget : !strategy_pilot_fits(width, height, options->spp, candidates))
         return "bdpt: too few samples for the pilot to pay off";
-    *pilot = run_strategy_pilot(device, ds, *options, timed ? 0 : options->spp, options->time_budget, adaptive,
-                                pilot_stats);
+    {
+        const ImageIoProcessPause paused;
+        *pilot = run_strategy_pilot(device, ds, *options, timed ? 0 : options->spp, options->time_budget, adaptive,
+                                    pilot_stats);
+    }
     const StrategyCandidate& c = pilot->choice();
     options->integrator = c.integrator;
     options->light_subpaths = c.light_subpaths;

@@ -247,6 +247,16 @@ std::optional<std::string> read_in_image_io_process(const std::string& path, boo
     return std::nullopt;
 }
 
+ImageIoProcessPause::ImageIoProcessPause() {
+    IoProcess& io = io_process();
+    std::lock_guard<std::mutex> lock(io.mutex);
+    if (io.pid > 0 && ::kill(io.pid, SIGSTOP) == 0) pid_ = io.pid;
+}
+
+ImageIoProcessPause::~ImageIoProcessPause() {
+    if (pid_ > 0) ::kill(pid_, SIGCONT);
+}
+
 int image_io_process_id() {
     IoProcess& io = io_process();
     std::lock_guard<std::mutex> lock(io.mutex);

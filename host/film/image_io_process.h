@@ -44,6 +44,20 @@ std::optional<std::string> write_in_image_io_process(const std::string& path, co
 // is no process or it has died, for the caller to read the image itself.
 std::optional<std::string> read_in_image_io_process(const std::string& path, bool own_format, StoredImage* image);
 
+// While one lives, the process is stopped (SIGSTOP; SIGCONT at its end): the strategy pilot
+// times its candidates' passes, and the process's loading of OpenImageIO (0.35 s of a core)
+// would slow the first ones it meets and not the others. It loads during the render instead.
+class ImageIoProcessPause {
+public:
+    ImageIoProcessPause();
+    ~ImageIoProcessPause();
+    ImageIoProcessPause(const ImageIoProcessPause&) = delete;
+    ImageIoProcessPause& operator=(const ImageIoProcessPause&) = delete;
+
+private:
+    int pid_ = -1;
+};
+
 // The process's id, -1 if there is none (for tests).
 int image_io_process_id();
 
