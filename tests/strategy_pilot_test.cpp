@@ -3,6 +3,7 @@
 // light tracing among the candidates, and how the pilot chooses.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <set>
 
 #include "render/strategy_pilot.h"
@@ -194,6 +195,24 @@ TEST(StrategyCandidates, PathTracingWhereItRendersEveryPath) {
     EXPECT_NE(path_tracing_shortfall(foggy).find("inside a medium"), std::string::npos);
     EXPECT_EQ(candidates_left_out(foggy), "pt left out: " + path_tracing_shortfall(foggy));
     EXPECT_EQ(names(foggy), every_mix);
+}
+
+// The lead that lets the pilot's candidates at the ends decide alone (kClearLeadMargin): the
+// chosen candidate's efficiency over the next best's, and for lt over its rival's transport alone
+// too, which lt must beat to be chosen at all.
+TEST(StrategyCandidates, ChoiceMarginIsTheLeadOverTheNext) {
+    std::vector<StrategyCandidate> c = strategy_candidates(scope_with(true, true));
+    for (size_t i = 0; i < c.size(); ++i) c[i].efficiency = c[i].efficiency_transport_only = 100.0 * double(i + 1);
+    c[3].efficiency = 1000;  // pt
+    EXPECT_DOUBLE_EQ(choice_margin(c, 3), 2.0) << "lt's 500 is the next";
+    EXPECT_DOUBLE_EQ(choice_margin(c, 4), 0.5);
+    c[4].efficiency = 3000;  // lt
+    c[4].efficiency_transport_only = 3000;
+    c[3].efficiency_transport_only = 2000;
+    EXPECT_DOUBLE_EQ(choice_margin(c, 4), 1.5) << "pt's transport alone, 2000, is lt's bar";
+    for (size_t i = 0; i < c.size(); ++i)
+        if (i != 4) c[i].efficiency = c[i].efficiency_transport_only = 0;
+    EXPECT_TRUE(std::isinf(choice_margin(c, 4)));
 }
 
 // Light roulette fixed on the command line (--russian-roulette N) goes with every candidate that

@@ -230,6 +230,11 @@ std::string choose_strategy_mix(DeviceContext& device, const DeviceScene& ds, Re
         std::snprintf(buf, sizeof buf, "chosen by a pilot of %.2f s (%.0f%% of the render's samples)", pilot->seconds,
                       100.0 * double(pilot->samples) / (double(width) * height * std::max(options->spp, 1)));
     std::string note = buf;
+    if (!pilot->skipped.empty()) {
+        std::snprintf(buf, sizeof buf, "; the bdpt mixes between not run (%s led the others %.2gx)", c.name.c_str(),
+                      pilot->lead_at_ends);
+        note += buf;
+    }
     const std::string left_out = candidates_left_out(ds);
     if (!left_out.empty()) note += "; " + left_out;
     const std::string passed_over = light_tracing_passed_over(pilot->candidates, pilot->chosen);
@@ -618,6 +623,8 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
             p["seconds"] = pilot.seconds;
             p["samples"] = pilot.samples;
             p["pixel_stride"] = pilot.pixel_stride;
+            p["lead_at_ends"] = pilot.lead_at_ends;
+            p["not_run"] = pilot.skipped;
             p["chosen"] = pilot.choice().name;
             for (const StrategyCandidate& c : pilot.candidates)
                 p["candidates"].push_back({{"name", c.name},

@@ -382,6 +382,17 @@ int choose_strategy_candidate(const std::vector<StrategyCandidate>& candidates) 
     return chosen;
 }
 
+double choice_margin(const std::vector<StrategyCandidate>& candidates, int chosen) {
+    const StrategyCandidate& c = candidates[size_t(chosen)];
+    double runner_up = 0;
+    for (int i = 0; i < int(candidates.size()); ++i)
+        if (i != chosen) runner_up = std::max(runner_up, candidates[size_t(i)].efficiency);
+    if (c.integrator == Integrator::Lt)
+        if (const StrategyCandidate* rival = lt_rival(candidates))
+            runner_up = std::max(runner_up, rival->efficiency_transport_only);
+    return runner_up > 0 ? c.efficiency / runner_up : INFINITY;
+}
+
 std::string light_tracing_passed_over(const std::vector<StrategyCandidate>& candidates, int chosen) {
     const StrategyCandidate* lt = nullptr;
     for (const StrategyCandidate& c : candidates)
@@ -479,7 +490,6 @@ StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene
     // Light roulette as the command line fixed it (with auto, none until tried below).
     pilot.candidates = strategy_candidates(scene, options.roulette_light_from);
     pilot.spp = spp;
-    const int k = int(pilot.candidates.size());
     const int width = scene.camera.width, height = scene.camera.height;
     // A timed render has no sample count to share: its grid follows its budget (main.cpp gives
     // it a pilot only when the budget is long enough).
@@ -507,20 +517,19 @@ StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene
     const uint32_t seed_x = options.seed ^ 0x6a09e667u, seed_y = options.seed ^ 0xbb67ae85u,
                    seed_c = options.seed ^ 0x3c6ef372u;
     std::vector<std::vector<GridPass>> passes;
-    // Each candidate's fastest pass: load from elsewhere (the image I/O process loads its
-    // libraries during the pilot) and a first pass's one-off costs only ever add time, and a
-    // pass lasts 5-50 ms. With the mean of the three, a slow pass of full bdpt once handed
+    // Each candidate's fastest pass: load from elsewhere and a first pass's one-off costs only
+    // ever add time, and a pass lasts 5-50 ms. (The image I/O process, which loads its libraries
+    // meanwhile, is stopped during the pilot: ImageIoProcessPause, film/image_io_process.h.) With the mean of the three, a slow pass of full bdpt once handed
     // lamp-ceiling to the mix without inner connections, and a slow pass of pt handed sky to bdpt.
     std::vector<double> seconds;
-    // The passes of candidates `first` on. Round robin, so a change of the machine's load hits
-    // every candidate alike.
-    auto run_passes = [&](int first) {
-        const int end = int(pilot.candidates.size());
-        passes.resize(size_t(end),
-                      std::vector<GridPass>(kPilotPassesPerCandidate, GridPass(width, height, pilot.pixel_stride)));
-        seconds.resize(size_t(end), 1e300);
+    // The passes of the candidates `which` (indices). Round robin, so a change of the machine's
+    // load hits every candidate alike.
+    auto run_passes = [&](const std::vector<int>& which) {
+        const size_t end = pilot.candidates.size();
+        passes.resize(end, std::vector<GridPass>(kPilotPassesPerCandidate, GridPass(width, height, pilot.pixel_stride)));
+        seconds.resize(end, 1e300);
         for (int round = 0; round < kPilotPassesPerCandidate; ++round)
-            for (int i = first; i < end; ++i) {
+            for (int i : which) {
                 const StrategyCandidate& c = pilot.candidates[size_t(i)];
                 Renderer* r = by_integrator[int(c.integrator)];
                 if (c.integrator == Integrator::Bdpt) r->set_strategy_mix(c.light_subpaths, c.inner_connections);
@@ -544,19 +553,20 @@ StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene
                 stats->add_counts(rendered.counts);
             }
     };
-    // Every candidate's variances, predicted error and efficiency, from all the passes so far.
-    auto evaluate = [&]() {
-        std::vector<SetVariances> transport;
-        for (int i = 0; i < int(pilot.candidates.size()); ++i) transport.push_back(set_variances(passes[size_t(i)], kPilotSetSize));
+    // The variances, predicted error and efficiency of the candidates `which` (those whose
+    // passes ran), from their passes.
+    auto evaluate = [&](const std::vector<int>& which) {
+        std::vector<SetVariances> transport(pilot.candidates.size());
+        for (int i : which) transport[size_t(i)] = set_variances(passes[size_t(i)], kPilotSetSize);
         std::vector<const std::vector<double>*> camera_terms;
-        for (int i = 0; i < int(pilot.candidates.size()); ++i)
+        for (int i : which)
             if (pilot.candidates[size_t(i)].integrator != Integrator::Lt)
                 camera_terms.push_back(&transport[size_t(i)].one_terms);
         const std::vector<double> shared_tail = shared_tail_terms(camera_terms);
         const std::vector<bool> rare_paths = rare_shared_pixels(camera_terms);
         const double shared_counted = kSharedVarianceCounted * common_shared_variance(shared_tail, rare_paths, camera_terms);
 
-        for (int i = 0; i < int(pilot.candidates.size()); ++i) {
+        for (int i : which) {
             StrategyCandidate& c = pilot.candidates[size_t(i)];
             const std::vector<GridPass>& f = passes[size_t(i)];
             const SetVariances& t = transport[size_t(i)];
@@ -612,8 +622,46 @@ StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene
             c.efficiency_transport_only = transport_cost > 0 ? 1.0 / transport_cost : 0.0;
         }
     };
-    run_passes(0);
-    evaluate();
+    auto every_candidate = [&]() {
+        std::vector<int> all(pilot.candidates.size());
+        for (int i = 0; i < int(all.size()); ++i) all[size_t(i)] = i;
+        return all;
+    };
+    // First the candidates at the ends: full bdpt, pt and lt (those the scene allows). Where pt
+    // or lt leads full bdpt (and the other) by kClearLeadMargin, it is chosen without the
+    // mixes between (half the light subpaths; no inner connections), which cost 2-3x a
+    // path-traced sample each and so most of the pilot's time there; else they run too, and the
+    // choice is among all, as if all had run at once.
+    std::vector<int> ends, between;
+    for (int i = 0; i < int(pilot.candidates.size()); ++i) {
+        const StrategyCandidate& c = pilot.candidates[size_t(i)];
+        const bool full_bdpt = c.integrator == Integrator::Bdpt && c.light_subpaths == 1.0f && c.inner_connections;
+        (full_bdpt || c.integrator != Integrator::Bdpt ? ends : between).push_back(i);
+    }
+    run_passes(ends);
+    evaluate(ends);
+    std::vector<StrategyCandidate> at_ends;
+    for (int i : ends) at_ends.push_back(pilot.candidates[size_t(i)]);
+    const int end_choice = choose_strategy_candidate(at_ends);
+    pilot.lead_at_ends = choice_margin(at_ends, end_choice);
+    if (!between.empty() && (at_ends[size_t(end_choice)].integrator == Integrator::Bdpt ||
+                             pilot.lead_at_ends < kClearLeadMargin)) {
+        run_passes(between);
+        evaluate(every_candidate());
+    } else {
+        // The mixes between did not run: the pilot's candidates are those that did.
+        for (int i : between) pilot.skipped.push_back(pilot.candidates[size_t(i)].name);
+        std::vector<std::vector<GridPass>> ran;
+        std::vector<double> ran_seconds;
+        for (int i : ends) {
+            ran.push_back(std::move(passes[size_t(i)]));
+            ran_seconds.push_back(seconds[size_t(i)]);
+        }
+        pilot.candidates = at_ends;
+        passes = std::move(ran);
+        seconds = std::move(ran_seconds);
+    }
+    const int k = int(pilot.candidates.size());
     pilot.chosen = choose_strategy_candidate(pilot.candidates);
     // Russian roulette in the light subpaths of the chosen bdpt mix, tried as one candidate more:
     // it paid 1.25x on cornell-specular, whose light subpaths serve the caustics alone, but it
@@ -624,8 +672,8 @@ StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene
         c.roulette_light_from = kRouletteLightFromPilot;
         c.name = describe_strategy_mix(c.integrator, c.light_subpaths, c.inner_connections, c.roulette_light_from);
         pilot.candidates.push_back(c);
-        run_passes(k);
-        evaluate();
+        run_passes({k});
+        evaluate(every_candidate());
         pilot.chosen = choose_strategy_candidate(pilot.candidates);
     }
     pilot.samples = uint64_t(items) * kPilotPassesPerCandidate * pilot.candidates.size();

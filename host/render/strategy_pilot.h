@@ -28,9 +28,12 @@
 // variance / N overstates it 2.3x for pt and 4.6x for BDPT without inner connections. So the
 // squared error of N samples is predicted as A / N + B / N^2 + v_pixel / N^1.5, and the
 // candidate with the least error times time (N x seconds per sample, from its fastest pass) is
-// chosen: the inverse of Grittmann et al.'s efficiency. Where that is a BDPT mix, the pilot runs
-// the mix once more with Russian roulette in its light subpaths (kRouletteLightFromPilot,
-// render/features.h) as one candidate more, and chooses again among all. A leaves out the samples that every
+// chosen: the inverse of Grittmann et al.'s efficiency. The candidates at the ends (full bdpt,
+// pt, lt) run first; where pt or lt leads the others there by kClearLeadMargin, it is chosen
+// without the mixes between, which cost 2-3x a path-traced sample each. Where the choice is a
+// BDPT mix, the pilot runs the mix once more with Russian roulette in its light subpaths
+// (kRouletteLightFromPilot, render/features.h) as one candidate more, and chooses again among
+// all. A leaves out the samples that every
 // camera candidate has alike (shared_tail_terms), and the pixels where every camera candidate
 // met the same rare path (rare_shared_pixels), counting a share of their common part for every
 // camera candidate instead (common_shared_variance), and counts two standard errors high, so that a
@@ -154,6 +157,10 @@ struct StrategyPilot {
     int pixel_stride = 1;  // the sparse grid: every pixel_stride-th pixel of every pixel_stride-th row
     uint64_t samples = 0;  // pilot samples, all candidates
     double seconds = 0;    // wall time of the pilot's passes (kernel builds count as builds)
+    // The efficiency of the best of the candidates at the ends (full bdpt, pt, lt) over the next
+    // (choice_margin), and the candidates between that did not run since it was clear.
+    double lead_at_ends = 0;
+    std::vector<std::string> skipped;
     // Kept so the main render reuses their kernels and uploaded scene (one per integrator).
     std::vector<std::unique_ptr<Renderer>> renderers;
     const StrategyCandidate& choice() const { return candidates[size_t(chosen)]; }
@@ -163,6 +170,19 @@ struct StrategyPilot {
 // efficiency also beats every other candidate's efficiency_transport_only (run_strategy_pilot).
 // Candidate 0 when every efficiency is 0 (a black image).
 int choose_strategy_candidate(const std::vector<StrategyCandidate>& candidates);
+
+// How far the chosen candidate leads: its efficiency over the highest of the others' (and, for
+// lt, over its rival's efficiency_transport_only, which it must beat too); infinite where every
+// other is 0.
+double choice_margin(const std::vector<StrategyCandidate>& candidates, int chosen);
+// The lead of pt or lt over full bdpt (and each other) from which the pilot chooses it without
+// running the mixes between (run_strategy_pilot). Measured on the nine bundled scenes (seeds
+// 1-8, 64 and 16 spp, 144 pilots that ran every candidate): at 1.5 the ends decided alone in 81,
+// and in 76 of them the whole pilot chose the same; in the other 5 it chose a mix that full
+// renders measure at 0.10-0.84x of the ends' choice (scripts/pilot_choices' truth: veach-mis,
+// half the light subpaths, 0.10x pt; the Cornell box at 16 spp, no inner connections, 0.46x,
+// 3 times; sky, no inner connections, 0.84x). At 2.0 the ends decided alone in 57, at 2.5 in 51.
+constexpr double kClearLeadMargin = 1.5;
 
 // Where light tracing had the highest efficiency but was not chosen (choose_strategy_candidate):
 // one line saying so, with the efficiency it did not beat; else "".
