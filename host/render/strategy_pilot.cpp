@@ -518,9 +518,10 @@ StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene
                    seed_c = options.seed ^ 0x3c6ef372u;
     std::vector<std::vector<GridPass>> passes;
     // Each candidate's fastest pass: load from elsewhere and a first pass's one-off costs only
-    // ever add time, and a pass lasts 5-50 ms. (The image I/O process, which loads its libraries
-    // meanwhile, is stopped during the pilot: ImageIoProcessPause, film/image_io_process.h.) With the mean of the three, a slow pass of full bdpt once handed
-    // lamp-ceiling to the mix without inner connections, and a slow pass of pt handed sky to bdpt.
+    // ever add time, and a pass lasts 5-50 ms. With the mean of the three, a slow pass of full
+    // bdpt once handed lamp-ceiling to the mix without inner connections, and a slow pass of pt
+    // handed sky to bdpt. (The image I/O process, which loads its libraries meanwhile, is stopped
+    // during the pilot: ImageIoProcessPause, film/image_io_process.h.)
     std::vector<double> seconds;
     // The passes of the candidates `which` (indices). Round robin, so a change of the machine's
     // load hits every candidate alike.

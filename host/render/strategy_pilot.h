@@ -33,12 +33,12 @@
 // without the mixes between, which cost 2-3x a path-traced sample each. Where the choice is a
 // BDPT mix, the pilot runs the mix once more with Russian roulette in its light subpaths
 // (kRouletteLightFromPilot, render/features.h) as one candidate more, and chooses again among
-// all. A leaves out the samples that every
-// camera candidate has alike (shared_tail_terms), and the pixels where every camera candidate
-// met the same rare path (rare_shared_pixels), counting a share of their common part for every
-// camera candidate instead (common_shared_variance), and counts two standard errors high, so that a
-// candidate whose fireflies the grid happened to miss is not chosen for them (the standard error
-// without the grid's largest terms, which are in A already). The light image
+// all. A leaves out the samples that every camera candidate has alike (shared_tail_terms), and
+// the pixels where every camera candidate met the same rare path (rare_shared_pixels), counting
+// a share of their common part for every camera candidate instead (common_shared_variance), and
+// counts two standard errors high, so that a candidate whose fireflies the grid happened to miss
+// is not chosen for them (the standard error without the grid's largest terms, which are in A
+// already). The light image
 // (t = 1) takes no part in the grid's terms: its variance is estimated from the squares of all
 // the splats of the sparse passes' light subpaths, wherever they land (light_image_variance),
 // 20-30x more of them than land on the grid, and counted in A.
