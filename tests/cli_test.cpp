@@ -541,22 +541,25 @@ TEST_F(CliTest, RussianRouletteAsTheCommandLineSays) {
         std::ifstream in(out(name + ".json"));
         return nlohmann::json::parse(in);
     };
-    const nlohmann::json pt = render_with("--spp 16 --integrator pt", "pt");
-    EXPECT_EQ(pt["russian_roulette"]["camera_subpaths"], "from bounce 4") << pt.dump(2);
-    EXPECT_EQ(pt["russian_roulette"]["light_subpaths"], "none traced") << pt.dump(2);
-    const nlohmann::json off = render_with("--spp 16 --integrator bdpt --russian-roulette off", "off");
-    EXPECT_EQ(off["russian_roulette"]["camera_subpaths"], "off") << off.dump(2);
-    EXPECT_EQ(off["russian_roulette"]["light_subpaths"], "off") << off.dump(2);
-    const nlohmann::json lt = render_with("--spp 16 --integrator lt --russian-roulette 3", "lt");
-    EXPECT_EQ(lt["russian_roulette"]["camera_subpaths"], "none traced") << lt.dump(2);
-    EXPECT_EQ(lt["russian_roulette"]["light_subpaths"], "from bounce 3") << lt.dump(2);
-    // Each kind its own: what the pilot's candidate with light roulette renders, forced.
-    const nlohmann::json both = render_with("--spp 16 --integrator bdpt --russian-roulette 4,2", "both");
-    EXPECT_EQ(both["russian_roulette"]["camera_subpaths"], "from bounce 4") << both.dump(2);
-    EXPECT_EQ(both["russian_roulette"]["light_subpaths"], "from bounce 2") << both.dump(2);
-    const nlohmann::json light_off = render_with("--spp 16 --integrator bdpt --russian-roulette 0,off", "light_off");
-    EXPECT_EQ(light_off["russian_roulette"]["camera_subpaths"], "from bounce 0") << light_off.dump(2);
-    EXPECT_EQ(light_off["russian_roulette"]["light_subpaths"], "off") << light_off.dump(2);
+    struct Case {
+        const char* name;
+        const char* flags;
+        const char* camera_subpaths;  // what --stats says
+        const char* light_subpaths;
+    };
+    const Case cases[] = {
+        {"pt", "--integrator pt", "from bounce 4", "none traced"},
+        {"off", "--integrator bdpt --russian-roulette off", "off", "off"},
+        {"lt", "--integrator lt --russian-roulette 3", "none traced", "from bounce 3"},
+        // Each kind its own: what the pilot's candidate with light roulette renders, forced.
+        {"both", "--integrator bdpt --russian-roulette 4,2", "from bounce 4", "from bounce 2"},
+        {"light_off", "--integrator bdpt --russian-roulette 0,off", "from bounce 0", "off"},
+    };
+    for (const Case& c : cases) {
+        const nlohmann::json j = render_with(std::string("--spp 16 ") + c.flags, c.name);
+        EXPECT_EQ(j["russian_roulette"]["camera_subpaths"], c.camera_subpaths) << c.name << j.dump(2);
+        EXPECT_EQ(j["russian_roulette"]["light_subpaths"], c.light_subpaths) << c.name << j.dump(2);
+    }
     // Enough samples that the pilot runs (it may take a tenth of them).
     const nlohmann::json fixed = render_with("--spp 400 --russian-roulette 1", "fixed");
     EXPECT_EQ(fixed["russian_roulette"]["camera_subpaths"], "from bounce 1") << fixed.dump(2);
