@@ -1,5 +1,7 @@
 #include "render/features.h"
 
+#include <optional>
+
 #include "util/error.h"
 
 namespace clbdpt {
@@ -16,31 +18,34 @@ std::string roulette_name(int from_bounce) {
     return from_bounce >= kRouletteOff ? "off" : "from bounce " + std::to_string(from_bounce);
 }
 
-int parse_roulette_bounce(const std::string& text) {
+namespace {
+
+// A first bounce (0 .. 1024) or "off", as text; nullopt for anything else.
+std::optional<int> parse_bounce_or_off(const std::string& text) {
+    if (text == "off") return kRouletteOff;
     size_t used = 0;
     int bounce = -1;
     try {
         bounce = std::stoi(text, &used);
     } catch (const std::exception&) {
-        used = 0;
+        return std::nullopt;
     }
-    if (used == 0 || used != text.size() || bounce < 0 || bounce > 1024)
-        throw Error("expected auto, off or a bounce from 0 to 1024, not '" + text + "'");
+    if (used != text.size() || bounce < 0 || bounce > 1024) return std::nullopt;
     return bounce;
 }
+
+}  // namespace
 
 RouletteSetting parse_russian_roulette(const std::string& text) {
     RouletteSetting s;
     if (text == "auto") return s;
     s.light_by_pilot = false;
     auto bounce_or_off = [&](const std::string& part) {
-        if (part == "off") return kRouletteOff;
-        try {
-            return parse_roulette_bounce(part);
-        } catch (const Error&) {
+        const std::optional<int> bounce = parse_bounce_or_off(part);
+        if (!bounce)
             throw Error("expected auto, off, a bounce from 0 to 1024 or two of them (camera,light; each a "
                         "bounce or off), not '" + text + "'");
-        }
+        return *bounce;
     };
     const size_t comma = text.find(',');
     if (comma == std::string::npos) {

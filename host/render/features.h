@@ -32,9 +32,6 @@ constexpr int kRouletteLightFromPilot = 2;
 
 // "off", or the first bounce, as the summary and --stats say it.
 std::string roulette_name(int from_bounce);
-// A first bounce given as text (0 .. 1024): throws Error naming it otherwise (the command line
-// prefixes the option's name).
-int parse_roulette_bounce(const std::string& text);
 // --russian-roulette: auto (camera subpaths from kRouletteCameraFrom, light subpaths as the
 // pilot finds), off, N (both kinds from bounce N), or C,L (camera subpaths from C, light
 // subpaths from L, each a bounce or off: what a pilot's candidate with light roulette renders,
