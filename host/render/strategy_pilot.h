@@ -177,12 +177,16 @@ int choose_strategy_candidate(const std::vector<StrategyCandidate>& candidates);
 double choice_margin(const std::vector<StrategyCandidate>& candidates, int chosen);
 // The lead of pt or lt over full bdpt (and each other) from which the pilot chooses it without
 // running the mixes between (run_strategy_pilot). Measured on the nine bundled scenes (seeds
-// 1-8, 64 and 16 spp, 144 pilots that ran every candidate): at 1.5 the ends decided alone in 81,
-// and in 76 of them the whole pilot chose the same; in the other 5 it chose a mix that full
+// 1-8, 64 and 16 spp, 144 pilots that ran every candidate): at 1.2 the ends decided alone in 93,
+// and in 87 of them the whole pilot chose the same; in the other 6 it chose a mix that full
 // renders measure at 0.10-0.84x of the ends' choice (scripts/pilot_choices' truth: veach-mis,
 // half the light subpaths, 0.10x pt; the Cornell box at 16 spp, no inner connections, 0.46x,
-// 3 times; sky, no inner connections, 0.84x). At 2.0 the ends decided alone in 57, at 2.5 in 51.
-constexpr double kClearLeadMargin = 1.5;
+// 4 times; sky, no inner connections, 0.84x). Of the 12 that 1.2 decides and 1.5 did not, 10 are
+// lamp-ceiling's lt (leads 1.37-1.50; its mixes measure 0.53-0.62x of lt, and the whole pilot
+// chose lt too) and 2 the Cornell box's pt (1.27, 1.47). At 1.5 the ends decided alone in 81, at
+// 2.0 in 57. Not 1.0: a mix between two ends that nearly tie may beat both (half the light
+// subpaths did on cornell-specular, where full bdpt led).
+constexpr double kClearLeadMargin = 1.2;
 
 // Where light tracing had the highest efficiency but was not chosen (choose_strategy_candidate):
 // one line saying so, with the efficiency it did not beat; else "".
