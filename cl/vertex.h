@@ -32,6 +32,10 @@ typedef struct {
     int delta;     /* sampled by a specular (delta) lobe */
     int material;  /* surface: material index */
     int light;     /* light vertex: its light; surface: the area light of the triangle, or -1 */
+    /* bdpt: the MIS weight's sum over the strategies that split the path at this vertex or
+     * nearer the subpath's start, relative to one split just past it (mis_fill_tails, cl/mis.h);
+     * it fills the padding after `light`, so the vertex does not grow */
+    float mis_tail;
 #ifdef HAS_TEXTURES
     /* surface: the material's reflectances with its textures applied at the hit, looked up
      * once when the vertex is made (vertex_bsdf runs many times per vertex: sampling, every
@@ -70,6 +74,7 @@ inline PathVertex vertex_at(int type, float3 p, float3 ng, float p_error) {
     v.delta = 0;
     v.material = -1;
     v.light = -1;
+    v.mis_tail = 0.0f;
 #ifdef HAS_TEXTURES
     v.kd = (float3)(0.0f);
     v.ks = (float3)(0.0f);

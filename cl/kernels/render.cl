@@ -110,6 +110,8 @@ __kernel void render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, __global float
     rng_seek(&rng, SAMPLE_DRAW_TRACE_LIGHT_SUBPATH);
     if (rng_next(&rng) < mix.light_subpaths) n_light = generate_light_subpath(&scene, &rng, MAX_DEPTH, light_path);
     int light_is_area = n_light > 0 && lights[light_path[0].light].kind == LIGHT_AREA;
+    mis_fill_camera_tails(&mix, camera_path, n_camera);
+    mis_fill_light_tails(&scene, &mix, light_path, n_light);
 #endif
 
     __global SplatRecord* my_splats = splats + (size_t)gid * SPLAT_SLOTS;
