@@ -32,9 +32,10 @@ typedef struct {
     int delta;     /* sampled by a specular (delta) lobe */
     int material;  /* surface: material index */
     int light;     /* light vertex: its light; surface: the area light of the triangle, or -1 */
-    /* bdpt: the MIS weight's sum over the strategies that split the path at this vertex or
-     * nearer the subpath's start, relative to one split just past it (mis_fill_tails, cl/mis.h);
-     * it fills the padding after `light`, so the vertex does not grow */
+    /* bdpt: the MIS recursion's sum over the strategies that split the subpath at this vertex
+     * or nearer its start, relative to the strategy that splits it just past this vertex
+     * (mis_fill_camera_tails, mis_fill_light_tails in cl/mis.h); it fills the padding after
+     * `light`, so the vertex does not grow */
     float mis_tail;
 #ifdef HAS_TEXTURES
     /* surface: the material's reflectances with its textures applied at the hit, looked up
