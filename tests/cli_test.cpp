@@ -60,6 +60,10 @@ TEST_F(CliTest, BadInputGivesOneErrorLineAndNoOutput) {
         {"missing output folder", data("defaults.json") + tiny, "no_such_folder"},
         {"output folder that cannot be written", data("defaults.json") + tiny, "/proc/"},
         {"kernel build failure", data("defaults.json") + tiny, "kernel build failed for kernels/render.cl"},
+        // PoCL keeps a work-group's path vertices on one thread's stack: a group this large at this
+        // depth (about 14 GiB) would overflow any stack limit, and crashed where it was not refused.
+        {"work-group too large for a CPU thread's stack", data("defaults.json") + tiny + " --local-size 65536 --max-depth 1000",
+         "--local-size 65536"},
     };
     // A kernel source that does not compile, read instead of the embedded one.
     const fs::path broken_kernels = dir_.parent_path() / (dir_.filename().string() + "_kernels");

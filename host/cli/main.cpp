@@ -855,7 +855,7 @@ int main(int argc, char** argv) {
                        "Also write each (s,t) strategy's MIS-weighted contribution as DIR/s<s>_t<t>.exr");
     render->add_flag("--unweighted", args.unweighted, "With --strategy-images: write the contributions before MIS");
     render->add_flag("--all-features", args.all_features, "Build the kernel with every feature enabled (benchmarks)");
-    render->add_option("--local-size", args.local_size, "OpenCL work-group size (default: the driver's choice)")
+    render->add_option("--local-size", args.local_size, "OpenCL work-group size (default: 16 on CPU devices, where PoCL keeps a work-group's path vertices on one thread's stack, and larger sizes at large max depths are refused; elsewhere the driver's choice)")
         ->check(CLI::PositiveNumber);
     render->add_flag("--profile", args.profile,
                      "Report time per stage: render kernel and read-back (OpenCL profiling events), the host's collection, "

@@ -3,11 +3,14 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <iterator>
 #include <numeric>
 #include <optional>
 #include <thread>
+
+#include <sys/resource.h>
 
 #include "util/error.h"
 
@@ -30,6 +33,36 @@ constexpr int kMaxBatchItems = 1 << 18;
 // it (observed: a crash at max depth 7 with the driver's choice). Small groups cost nothing
 // there (measured: the same samples/s at 1, 4 and 16 as with the driver's choice at depth 5).
 constexpr int kCpuLocalSize = 16;
+
+// So a work-group size on a CPU device is refused where its items' path vertices would not fit
+// in a thread's stack: the stack limit (ulimit -s, which PoCL's threads get; 2 MiB assumed where
+// it is unlimited) less a margin (kStackMargin, or a quarter of a smaller limit). A bdpt item keeps 2 max_depth + 3 vertices (PathVertex in
+// cl/vertex.h: 112 bytes, 32 more with textures, 16 more with emission textures, 16 more with
+// media) and kItemOtherBytes of other locals. Measured with 8 MiB and 112-byte vertices: 512
+// items at max depth 64 (7.5 MiB of vertices) rendered, 1024 crashed; with a 32 MiB limit 1024
+// rendered; at max depth 5, 4096 items (6.0 MiB) rendered.
+constexpr double kStackMargin = 256.0 * 1024;
+constexpr double kItemOtherBytes = 512;
+
+void check_cpu_group_fits_stack(int local_size, int max_depth, const std::vector<std::string>& defines) {
+    auto has = [&](const char* name) { return std::find(defines.begin(), defines.end(), name) != defines.end(); };
+    const double vertex_bytes = 112.0 + (has("HAS_TEXTURES") ? 32 : 0) + (has("HAS_EMISSION_TEXTURES") ? 16 : 0) +
+                                (has("HAS_MEDIA") ? 16 : 0);
+    rlimit limit{};
+    double stack = 2.0 * (1 << 20);
+    if (getrlimit(RLIMIT_STACK, &limit) == 0 && limit.rlim_cur != RLIM_INFINITY) stack = double(limit.rlim_cur);
+    const double per_item = (2.0 * max_depth + 3.0) * vertex_bytes + kItemOtherBytes;
+    const double budget = stack - std::min(kStackMargin, stack / 4);
+    if (double(local_size) * per_item <= budget) return;
+    char buf[400];
+    std::snprintf(buf, sizeof buf,
+                  "--local-size %d: a work-group of %d items at max depth %d needs about %.1f MiB of a CPU "
+                  "thread's stack for its path vertices, more than the stack limit of %.1f MiB (ulimit -s) "
+                  "allows; at most %d items fit at this depth",
+                  local_size, local_size, max_depth, double(local_size) * per_item / (1 << 20), stack / (1 << 20),
+                  std::max(0, int(budget / per_item)));
+    throw Error(buf);
+}
 
 // A launch that takes longer than this makes the following ones smaller: a GPU driver's
 // watchdog kills long launches (about 2 s on some), and a long launch delays the progress bar
@@ -75,6 +108,8 @@ Renderer::Renderer(DeviceContext& device, const DeviceScene& scene, const Render
                            : std::clamp(int(std::thread::hardware_concurrency()) / 2, 1, kMaxCollectThreads);
     stats_.defines = kernel_defines(scene, options.integrator, options.max_depth, options.all_features, options.sampler,
                                     options.light_sampling);
+    if (device.entry().type == "CPU" && local_size_ > 0)
+        check_cpu_group_fits_stack(local_size_, options.max_depth, stats_.defines);
     if (options.strategy_images != RenderOptions::StrategyImages::Off) {
         stats_.defines.push_back("STRATEGY_IMAGES");
         if (options.strategy_images == RenderOptions::StrategyImages::Unweighted)
