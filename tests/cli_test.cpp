@@ -63,7 +63,9 @@ TEST_F(CliTest, BadInputGivesOneErrorLineAndNoOutput) {
         // PoCL keeps a work-group's path vertices on one thread's stack: a group this large at this
         // depth (about 14 GiB) would overflow any stack limit, and crashed where it was not refused.
         {"work-group too large for a CPU thread's stack", data("defaults.json") + tiny + " --local-size 65536 --max-depth 1000",
-         "--local-size 65536"},
+         "a CPU work-group of 65536 items (--local-size) at max depth 1000"},
+        {"max depth too large for a CPU thread's stack", data("defaults.json") + tiny + " --max-depth 100000",
+         "a CPU work-group of 16 items (the default) at max depth 100000"},
     };
     // A kernel source that does not compile, read instead of the embedded one.
     const fs::path broken_kernels = dir_.parent_path() / (dir_.filename().string() + "_kernels");

@@ -44,7 +44,7 @@ constexpr int kCpuLocalSize = 16;
 constexpr double kStackMargin = 256.0 * 1024;
 constexpr double kItemOtherBytes = 512;
 
-void check_cpu_group_fits_stack(int local_size, int max_depth, const std::vector<std::string>& defines) {
+void check_cpu_group_fits_stack(int local_size, bool by_hand, int max_depth, const std::vector<std::string>& defines) {
     auto has = [&](const char* name) { return std::find(defines.begin(), defines.end(), name) != defines.end(); };
     const double vertex_bytes = 112.0 + (has("HAS_TEXTURES") ? 32 : 0) + (has("HAS_EMISSION_TEXTURES") ? 16 : 0) +
                                 (has("HAS_MEDIA") ? 16 : 0);
@@ -54,13 +54,16 @@ void check_cpu_group_fits_stack(int local_size, int max_depth, const std::vector
     const double per_item = (2.0 * max_depth + 3.0) * vertex_bytes + kItemOtherBytes;
     const double budget = stack - std::min(kStackMargin, stack / 4);
     if (double(local_size) * per_item <= budget) return;
-    char buf[400];
+    const int items_that_fit = int(budget / per_item);
+    const int depth_that_fits = int(std::floor(((budget / local_size - kItemOtherBytes) / vertex_bytes - 3.0) / 2.0));
+    char buf[500];
     std::snprintf(buf, sizeof buf,
-                  "--local-size %d: a work-group of %d items at max depth %d needs about %.1f MiB of a CPU "
-                  "thread's stack for its path vertices, more than the stack limit of %.1f MiB (ulimit -s) "
-                  "allows; at most %d items fit at this depth",
-                  local_size, local_size, max_depth, double(local_size) * per_item / (1 << 20), stack / (1 << 20),
-                  std::max(0, int(budget / per_item)));
+                  "a CPU work-group of %d items (%s) at max depth %d needs about %.1f MiB of a thread's stack for "
+                  "its path vertices, more than the stack limit of %.1f MiB (ulimit -s) allows: at this depth at most "
+                  "%d items fit (--local-size), and with %d items at most max depth %d (--max-depth)",
+                  local_size, by_hand ? "--local-size" : "the default", max_depth,
+                  double(local_size) * per_item / (1 << 20), stack / (1 << 20), std::max(0, items_that_fit),
+                  local_size, std::max(0, depth_that_fits));
     throw Error(buf);
 }
 
@@ -109,7 +112,7 @@ Renderer::Renderer(DeviceContext& device, const DeviceScene& scene, const Render
     stats_.defines = kernel_defines(scene, options.integrator, options.max_depth, options.all_features, options.sampler,
                                     options.light_sampling);
     if (device.entry().type == "CPU" && local_size_ > 0)
-        check_cpu_group_fits_stack(local_size_, options.max_depth, stats_.defines);
+        check_cpu_group_fits_stack(local_size_, options.local_size > 0, options.max_depth, stats_.defines);
     if (options.strategy_images != RenderOptions::StrategyImages::Off) {
         stats_.defines.push_back("STRATEGY_IMAGES");
         if (options.strategy_images == RenderOptions::StrategyImages::Unweighted)
