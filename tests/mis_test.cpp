@@ -121,15 +121,20 @@ TEST(MisWeights, SumToOneInMedia) {
     }
 }
 
-// Efficiency-aware mixes (cl/strategies.h): the count-weighted balance heuristic still sums to 1
-// over the strategies the mix enables.
-TEST(MisWeights, SumToOneUnderStrategyMixes) {
-    Scene scene = load_scene(scene_path("cornell-specular"));
-    for (auto [light_subpaths, connections] : {std::pair{0.25f, true}, std::pair{0.5f, false}, std::pair{0.0f, true}}) {
-        MisSums sums = mis_sums(scene, Integrator::Bdpt, 8, 64, 4, light_subpaths, connections);
+// bdpt under each mix (light subpaths per sample, inner connections): the weights of every path
+// found sum to 1.
+void check_mixes(const Scene& scene, int max_depth, std::initializer_list<std::pair<float, bool>> mixes) {
+    for (auto [light_subpaths, connections] : mixes) {
+        MisSums sums = mis_sums(scene, Integrator::Bdpt, max_depth, 64, 4, light_subpaths, connections);
         EXPECT_GE(sums.paths, 100) << light_subpaths << " " << connections;
         EXPECT_LT(sums.worst, kTolerance) << light_subpaths << " " << connections << ": " << sums.paths << " paths";
     }
+}
+
+// Efficiency-aware mixes (cl/strategies.h): the count-weighted balance heuristic still sums to 1
+// over the strategies the mix enables.
+TEST(MisWeights, SumToOneUnderStrategyMixes) {
+    check_mixes(load_scene(scene_path("cornell-specular")), 8, {{0.25f, true}, {0.5f, false}, {0.0f, true}});
 }
 
 // Long paths (the Cornell box at max depth 20): each weight's terms beyond the two vertices next
@@ -137,12 +142,7 @@ TEST(MisWeights, SumToOneUnderStrategyMixes) {
 // cl/mis.h), the others from the recursion's own steps, so a tail that weighed a strategy unlike
 // its steps would make the weights of a long path sum to something else than 1.
 TEST(MisWeights, SumToOneOnLongPaths) {
-    Scene scene = load_scene(scene_path("cornell-box"));
-    for (auto [light_subpaths, connections] : {std::pair{1.0f, true}, std::pair{0.25f, true}, std::pair{0.5f, false}}) {
-        MisSums sums = mis_sums(scene, Integrator::Bdpt, 20, 64, 4, light_subpaths, connections);
-        EXPECT_GE(sums.paths, 100) << light_subpaths << " " << connections;
-        EXPECT_LT(sums.worst, kTolerance) << light_subpaths << " " << connections << ": " << sums.paths << " paths";
-    }
+    check_mixes(load_scene(scene_path("cornell-box")), 20, {{1.0f, true}, {0.25f, true}, {0.5f, false}});
 }
 
 }  // namespace
