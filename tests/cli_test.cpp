@@ -61,7 +61,8 @@ TEST_F(CliTest, BadInputGivesOneErrorLineAndNoOutput) {
         {"output folder that cannot be written", data("defaults.json") + tiny, "/proc/"},
         {"kernel build failure", data("defaults.json") + tiny, "kernel build failed for kernels/render.cl"},
         // PoCL keeps a work-group's path vertices on one thread's stack: a group this large at this
-        // depth (about 14 GiB) would overflow any stack limit, and crashed where it was not refused.
+        // depth (about 14 GiB), or the default group at this depth, would overflow any stack limit
+        // (1024 items at max depth 64 crashed with an 8 MiB limit before the check).
         {"work-group too large for a CPU thread's stack", data("defaults.json") + tiny + " --local-size 65536 --max-depth 1000",
          "a CPU work-group of 65536 items (--local-size) at max depth 1000"},
         {"max depth too large for a CPU thread's stack", data("defaults.json") + tiny + " --max-depth 100000",

@@ -36,9 +36,10 @@ constexpr int kCpuLocalSize = 16;
 
 // So a work-group size on a CPU device is refused where its items' path vertices would not fit
 // in a thread's stack: the stack limit (ulimit -s, which PoCL's threads get; 2 MiB assumed where
-// it is unlimited) less a margin (kStackMargin, or a quarter of a smaller limit). A bdpt item keeps 2 max_depth + 3 vertices (PathVertex in
-// cl/vertex.h: 112 bytes, 32 more with textures, 16 more with emission textures, 16 more with
-// media) and kItemOtherBytes of other locals. Measured with 8 MiB and 112-byte vertices: 512
+// it is unlimited) less a margin (kStackMargin, or a quarter of a smaller limit). A bdpt item
+// keeps 2 max_depth + 3 vertices (PathVertex in cl/vertex.h: 112 bytes, 32 more with textures,
+// 16 more with emission textures, 16 more with media) and kItemOtherBytes of other locals (a
+// path tracer's item keeps fewer: the bound holds for it too). Measured with 8 MiB and 112-byte vertices: 512
 // items at max depth 64 (7.5 MiB of vertices) rendered, 1024 crashed; with a 32 MiB limit 1024
 // rendered; at max depth 5, 4096 items (6.0 MiB) rendered.
 constexpr double kStackMargin = 256.0 * 1024;
