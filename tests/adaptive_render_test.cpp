@@ -205,5 +205,44 @@ TEST(AdaptiveSampling, ListedPixelsRenderAsTheirOwnRuns) {
     EXPECT_EQ(elsewhere, 0.0);
 }
 
+// Extra samples keep only the camera image (PassSpec::camera_image_only). A bdpt mix without inner
+// connections then traces no light subpaths for them: its camera image must come out bit for bit
+// as with them, for fewer rays and no splats; a mix with inner connections still traces them.
+TEST(AdaptiveSampling, CameraImageOnlySkipsUselessLightSubpaths) {
+    const int size = 16, samples = 4;
+    const DeviceScene scene = build_device_scene(load_scene(scene_path("cornell-specular")), size, size);
+    for (bool connections : {false, true}) {
+        RenderOptions options = make_options(Integrator::Bdpt, 8, 5, SamplerKind::Sobol);
+        options.light_subpaths = 0.5f;
+        options.inner_connections = connections;
+        Renderer renderer(test_device(), scene, options);
+        PassSpec whole;
+        whole.sample_index = whole.position_sample_index = 64;
+        whole.seed = whole.position_seed = 5;
+        whole.run_pixel = 0;
+        whole.run_length = size * size;
+        PassSpec camera_only = whole;
+        camera_only.camera_image_only = true;
+        const RenderedItems a = renderer.render_items(whole, 0, samples * size * size);
+        const RenderedItems b = renderer.render_items(camera_only, 0, samples * size * size);
+        ASSERT_EQ(a.camera.size(), b.camera.size());
+        double rays_a = 0, rays_b = 0;
+        for (size_t i = 0; i < a.rays.size(); ++i) {
+            rays_a += a.rays[i];
+            rays_b += b.rays[i];
+        }
+        if (connections) {
+            EXPECT_EQ(a.camera, b.camera);
+            EXPECT_EQ(rays_a, rays_b);
+            EXPECT_EQ(a.splats.size(), b.splats.size());
+            continue;
+        }
+        for (size_t i = 0; i < a.camera.size(); ++i) ASSERT_EQ(a.camera[i], b.camera[i]) << "item " << i / 3;
+        EXPECT_LT(rays_b, 0.9 * rays_a);
+        EXPECT_GT(a.splats.size(), 0u);
+        EXPECT_EQ(b.splats.size(), 0u);
+    }
+}
+
 }  // namespace
 }  // namespace clbdpt::test

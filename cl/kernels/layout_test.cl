@@ -40,6 +40,7 @@
         F(RenderParams, zsobol_log2_spp) F(RenderParams, zsobol_base4_digits) F(RenderParams, run_pixel) \
         F(RenderParams, run_length) F(RenderParams, light_to_lens) F(RenderParams, run_listed)           \
         F(RenderParams, roulette_camera_from) F(RenderParams, roulette_light_from)                \
+        F(RenderParams, camera_image_only)                                                        \
     S(SplatRecord) F(SplatRecord, r) F(SplatRecord, g) F(SplatRecord, b) F(SplatRecord, pixel)
 
 #ifdef CLBDPT_DEVICE

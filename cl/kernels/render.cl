@@ -108,7 +108,8 @@ __kernel void render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, __global float
     /* A fraction of light subpaths per pixel sample is a probability (cl/strategies.h). */
     int n_light = 0;
     rng_seek(&rng, SAMPLE_DRAW_TRACE_LIGHT_SUBPATH);
-    if (rng_next(&rng) < mix.light_subpaths) n_light = generate_light_subpath(&scene, &rng, MAX_DEPTH, light_path);
+    if (rng_next(&rng) < mix.light_subpaths && !(params.camera_image_only && !mix.inner_connections))
+        n_light = generate_light_subpath(&scene, &rng, MAX_DEPTH, light_path);
     int light_is_area = n_light > 0 && lights[light_path[0].light].kind == LIGHT_AREA;
     mis_fill_camera_tails(&mix, camera_path, n_camera);
     mis_fill_light_tails(&scene, &mix, light_path, n_light);

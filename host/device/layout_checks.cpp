@@ -140,6 +140,7 @@ CLBDPT_CHECK_FIELD(RenderParams, light_to_lens, 60);
 CLBDPT_CHECK_FIELD(RenderParams, run_listed, 64);
 CLBDPT_CHECK_FIELD(RenderParams, roulette_camera_from, 68);
 CLBDPT_CHECK_FIELD(RenderParams, roulette_light_from, 72);
+CLBDPT_CHECK_FIELD(RenderParams, camera_image_only, 76);
 
 CLBDPT_CHECK_STRUCT(SplatRecord, 16, 4);
 CLBDPT_CHECK_FIELD(SplatRecord, r, 0);

@@ -238,6 +238,7 @@ void render_adaptive_samples(Renderer& renderer, const AdaptivePlan& plan, Film&
             pass.seed = pass.position_seed = seed;
             pass.run_length = length;
             pass.run_pixels = list;
+            pass.camera_image_only = true;
             RenderedItems items = renderer.render_items(pass, 0, int(count * length));
             items.splats.clear();  // the light image keeps spp samples per pixel
             add_to_film(film, items);

@@ -32,7 +32,8 @@
 // The extra samples of pixel p are its samples spp .. n_p - 1, so they continue its Sobol
 // sequence. They add to the camera image only: a bdpt sample's light-image splats (t = 1) are
 // left out, so the light image keeps spp samples per pixel and each strategy's estimate its
-// own count (the MIS weights of a path still sum to one, so the sum stays unbiased). Extra
+// own count (the MIS weights of a path still sum to one, so the sum stays unbiased); a mix
+// without inner connections traces no light subpaths for them (PassSpec::camera_image_only). Extra
 // samples rendered by the path tracer are whole estimates of the pixel instead: the pixel is
 // then the mean of all its samples, its passes' light image counted as theirs (the default does
 // this for a bdpt mix where the pilot found pt close, render/strategy_pilot.h).

@@ -230,6 +230,7 @@ RenderParams Renderer::batch_params(const PassSpec& pass, int first_item, int it
     params.light_to_lens = uses_light_to_lens(scene_) ? 1 : 0;
     params.roulette_camera_from = options_.roulette_camera_from;
     params.roulette_light_from = options_.roulette_light_from;
+    params.camera_image_only = pass.camera_image_only ? 1 : 0;
     return params;
 }
 

@@ -148,6 +148,9 @@ struct PassSpec {
     // run_pixel + j (adaptive sampling's refined pixels, scattered over the film: one launch
     // for all of them rather than one per stretch of neighbours).
     std::shared_ptr<const std::vector<int>> run_pixels;
+    // Only the camera image is kept (adaptive sampling's extra samples): a bdpt mix without inner
+    // connections then traces no light subpaths (RenderParams::camera_image_only).
+    bool camera_image_only = false;
 };
 
 // Whether bdpt uses the (1,1) strategy, a light point joined straight to the lens, in `scene`:
