@@ -243,9 +243,9 @@ typedef struct {
      * from which it may end the subpath; RUSSIAN_ROULETTE_OFF: never. */
     clbdpt_int roulette_camera_from;
     clbdpt_int roulette_light_from;
-    /* 1: only the camera image is kept (adaptive sampling's extra samples; their light-image
-     * splats are dropped), and the mix makes no inner connections, so a light subpath has no use:
-     * none is traced. The camera image is the same bit for bit (its strategies, s <= 1, draw
+    /* 1: only the camera image is kept (adaptive sampling's extra samples, whose light-image
+     * splats are dropped): a mix without inner connections then has no use for a light subpath
+     * and traces none. Its camera image is the same bit for bit (its strategies, s <= 1, draw
      * nothing of the light subpath's and are weighed by the mix as before). */
     clbdpt_int camera_image_only;
 } RenderParams;
