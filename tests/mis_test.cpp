@@ -5,6 +5,7 @@
 #include <filesystem>
 
 #include "render/features.h"
+#include "render/renderer.h"
 #include "render/scene_buffers.h"
 #include "render_test_util.h"
 #include "test_scenes.h"
@@ -40,10 +41,11 @@ MisSums mis_sums(const Scene& scene, Integrator integrator, int max_depth, int s
         params.light_to_lens = light_to_lens ? 1 : 0;
         kernel.setArg(SceneBuffers::kSceneArgCount, params);
         kernel.setArg(SceneBuffers::kSceneArgCount + 1, out);
-        // Work-groups of 16, as the renderer's on CPUs (render/renderer.cpp, kCpuLocalSize): PoCL
-        // keeps a group's path vertices on one thread's stack, which a large group overflows at a
-        // large max depth (the driver's choice crashed at max depth 20).
-        device.queue().enqueueNDRangeKernel(kernel, cl::NullRange, cl::NDRange(size_t(pixels)), cl::NDRange(16));
+        // Work-groups of the renderer's CPU size (kCpuLocalSize, render/renderer.h): PoCL keeps a
+        // group's path vertices on one thread's stack, which a large group overflows at a large
+        // max depth (the driver's choice crashed at max depth 20).
+        device.queue().enqueueNDRangeKernel(kernel, cl::NullRange, cl::NDRange(size_t(pixels)),
+                                            cl::NDRange(size_t(kCpuLocalSize)));
         device.queue().enqueueReadBuffer(out, CL_TRUE, 0, sizeof(cl_float2) * pixels, host.data());
         for (const cl_float2& v : host) {
             result.worst = std::max(result.worst, v.s[0]);

@@ -28,12 +28,6 @@ int checked_roulette_bounce(int from_bounce) {
 constexpr size_t kMaxBatchBytes = size_t(256) << 20;
 constexpr int kMaxBatchItems = 1 << 18;
 
-// On CPU devices PoCL runs a work-group's items in one thread and keeps every item's private
-// path vertices on that thread's stack, so a large work-group at a large max depth overflows
-// it (observed: a crash at max depth 7 with the driver's choice). Small groups cost nothing
-// there (measured: the same samples/s at 1, 4 and 16 as with the driver's choice at depth 5).
-constexpr int kCpuLocalSize = 16;
-
 // So a work-group size on a CPU device is refused where its items' path vertices would not fit
 // in a thread's stack: the stack limit (ulimit -s, which PoCL's threads get; 2 MiB assumed where
 // it is unlimited) less a margin (kStackMargin, or a quarter of a smaller limit). A bdpt item
