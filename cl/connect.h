@@ -16,6 +16,9 @@
 #ifdef HAS_MEDIA
 #include "medium.h"
 #endif
+#ifdef HAS_CAUSTIC_MERGING
+#include "caustic_merging.h"
+#endif
 
 /* Multiplies a connection's contribution by the visibility of the segment between a and b, or,
  * with media, by its transmittance; then *to_a and *to_b receive the distance-sampling densities
@@ -58,6 +61,10 @@ inline float3 connect_bdpt(const SceneData* scene, const StrategyMix* mix, Rng* 
 
     if (s == 0) {
         const PathVertex* pt = &camera_path[t - 1];
+#ifdef HAS_CAUSTIC_MERGING
+        /* The pass's caustic photons estimate these paths instead (render.cl). */
+        if (merged_by_caustic_photons(camera_path, t)) return L;
+#endif
         if (vertex_is_light(pt)) L = vertex_le(scene, pt, &camera_path[t - 2]) * pt->beta;
     } else if (t == 1) {
         const PathVertex* qs = &light_path[s - 1];

@@ -31,6 +31,9 @@ typedef struct {
      * RenderParams' in the render kernel, RUSSIAN_ROULETTE_OFF in every other. */
     int roulette_camera_from;
     int roulette_light_from;
+    /* Set by the caustic photon kernel alone: a walk ends at its first non-specular vertex
+     * (cl/walk.h), which is all that kernel keeps. */
+    int walk_ends_at_scattering;
 } SceneData;
 
 /* The kernel arguments every light-transport kernel takes, in this order (the host sets them
@@ -79,6 +82,7 @@ inline SceneData scene_data(__global const BvhNode* nodes, __global const Triang
     s.rays_traced = rays;
     s.roulette_camera_from = RUSSIAN_ROULETTE_OFF;
     s.roulette_light_from = RUSSIAN_ROULETTE_OFF;
+    s.walk_ends_at_scattering = 0;
     return s;
 }
 

@@ -157,6 +157,7 @@ inline int random_walk(const SceneData* scene, Rng* rng, float3 o, float3 d, flo
 #endif
         ++i;
         if (vertex->type == VERTEX_LIGHT || i == end) break;
+        if (scene->walk_ends_at_scattering && vertex_is_connectible(scene, vertex)) break;
 
         int bounce = i - 1 - start;
         if ((bounce & 1) == 0) {

@@ -408,9 +408,11 @@ struct PairedStats {
 };
 
 
-inline PairedStats render_paired(const DeviceScene& scene_a, const DeviceScene& scene_b, const RenderOptions& options,
-                                 int passes, int blocks) {
-    Renderer ra(test_device(), scene_a, options), rb(test_device(), scene_b, options);
+// The same for one scene under two sets of options that should give the same image, with the
+// same seed (e.g. two estimators of one class of paths, the rest drawn alike).
+inline PairedStats render_paired(const DeviceScene& scene_a, const RenderOptions& options_a,
+                                 const DeviceScene& scene_b, const RenderOptions& options_b, int passes, int blocks) {
+    Renderer ra(test_device(), scene_a, options_a), rb(test_device(), scene_b, options_b);
     const int w = scene_a.camera.width, h = scene_a.camera.height;
     const int n = blocks * blocks + 1;
     std::vector<double> sum[3], sum2[3];
@@ -447,6 +449,11 @@ inline PairedStats render_paired(const DeviceScene& scene_a, const DeviceScene& 
         }
     }
     return out;
+}
+
+inline PairedStats render_paired(const DeviceScene& scene_a, const DeviceScene& scene_b, const RenderOptions& options,
+                                 int passes, int blocks) {
+    return render_paired(scene_a, options, scene_b, options, passes, blocks);
 }
 
 // Whether the paired difference is zero within `sigmas` of its standard error, with a floor

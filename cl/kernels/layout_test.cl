@@ -41,7 +41,10 @@
         F(RenderParams, run_length) F(RenderParams, light_to_lens) F(RenderParams, run_listed)           \
         F(RenderParams, roulette_camera_from) F(RenderParams, roulette_light_from)                \
         F(RenderParams, camera_image_only)                                                        \
-    S(SplatRecord) F(SplatRecord, r) F(SplatRecord, g) F(SplatRecord, b) F(SplatRecord, pixel)
+    S(SplatRecord) F(SplatRecord, r) F(SplatRecord, g) F(SplatRecord, b) F(SplatRecord, pixel)     \
+    S(CausticPhoton) F(CausticPhoton, p) F(CausticPhoton, ng) F(CausticPhoton, wi) F(CausticPhoton, beta) \
+    S(MergeSlice) F(MergeSlice, photon_begin) F(MergeSlice, cell_begin) F(MergeSlice, cell_mask)   \
+        F(MergeSlice, radius) F(MergeSlice, inv_cell) F(MergeSlice, estimate_scale) F(MergeSlice, pad)
 
 #ifdef CLBDPT_DEVICE
 

@@ -13,6 +13,9 @@
  * that pixel's sample 0 give one. */
 #include "connect.h"
 #include "walk.h"
+#ifdef HAS_CAUSTIC_MERGING
+#include "caustic_merging.h"
+#endif
 
 #ifndef MAX_DEPTH
 #define MAX_DEPTH 5
@@ -43,6 +46,10 @@
 
 __kernel void render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, __global float4* camera_out,
                           __global SplatRecord* splats, __global const int* run_pixels
+#ifdef HAS_CAUSTIC_MERGING
+                          , __global const CausticPhoton* photons, __global const uint* merge_cells,
+                          __global const MergeSlice* merge_slices, uint merge_slice_count
+#endif
 #ifdef STRATEGY_IMAGES
                           , __global SplatRecord* strategy_records
 #endif
@@ -125,6 +132,16 @@ __kernel void render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, __global float
 
     float3 L = (float3)(0.0f);
     int bad_strategy = -1;
+#ifdef HAS_CAUSTIC_MERGING
+    /* The pass's photons (its slice) stand in for s = 0 on caustics seen through specular
+     * vertices (cl/caustic_merging.h); a non-finite estimate is reported as strategy 0. */
+    {
+        CausticMap merge_map = {photons, merge_cells, merge_slices};
+        L = caustic_merges(&scene, &merge_map, sample_index % merge_slice_count, camera_path, n_camera);
+        float probe = L.x + L.y + L.z;
+        if (probe - probe != 0.0f) bad_strategy = 0;
+    }
+#endif
     for (int t = 1; t <= n_camera; ++t) {
         /* s = 1 with t >= 2 samples its own light point: it needs no light subpath. */
         for (int s = 0; s <= max(n_light, 1); ++s) {
@@ -196,3 +213,33 @@ __kernel void render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, __global float
     camera_out[gid] = (float4)(L.x, L.y, L.z, bad_strategy < 0 ? (float)rays_traced : -1.0f - (float)bad_strategy);
 #endif
 }
+
+#ifdef HAS_CAUSTIC_MERGING
+/* The caustic photons of passes first_slice, first_slice + 1, ...: item i (first_item + the work
+ * item's index) traces light subpath i % paths_per_slice of pass first_slice + i / paths_per_slice
+ * from its own sample sequence, as far as its first non-specular vertex, and appends that vertex
+ * to out if it is a caustic photon (cl/caustic_merging.h), with i in beta.w's bits: the host
+ * orders them by it, so the order the items ran in does not matter. *count holds the number
+ * appended. */
+__kernel void trace_caustic_photons(SCENE_KERNEL_ARGS, uint paths_per_slice, uint first_slice, uint first_item,
+                                    uint item_count, uint seed, __global CausticPhoton* out,
+                                    __global volatile uint* count) {
+    if (get_global_id(0) >= item_count) return;
+    uint item = first_item + (uint)get_global_id(0);
+    uint rays_traced = 0;
+    SceneData scene = SCENE_DATA_FROM_KERNEL_ARGS(&rays_traced);
+    scene.walk_ends_at_scattering = 1;
+    Rng rng = rng_init(item % paths_per_slice, first_slice + item / paths_per_slice, seed ^ 0x63a9f1d5u);
+    PathVertex light_path[MAX_DEPTH + 1];
+    int n_light = generate_light_subpath(&scene, &rng, MAX_DEPTH, light_path);
+    int m = caustic_photon_vertex(&scene, light_path, n_light);
+    if (m == 0) return;
+    const PathVertex* v = &light_path[m];
+    CausticPhoton ph;
+    ph.p = (float4)(v->p, (float)m);
+    ph.ng = (float4)(v->ng, 0.0f);
+    ph.wi = (float4)(v->wo, 0.0f);
+    ph.beta = (float4)(v->beta, as_float(item));
+    out[atomic_inc(count)] = ph;
+}
+#endif

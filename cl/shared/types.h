@@ -299,4 +299,33 @@ typedef struct {
     clbdpt_int pixel;
 } SplatRecord;
 
+/* ---- Caustic merging (cl/caustic_merging.h) --------------------------------------------- */
+
+/* A light subpath's first vertex on a non-specular surface that it reached through one or more
+ * specular vertices (mirror, glass) from an area light. */
+typedef struct {
+    clbdpt_float4 p;    /* xyz: position; w: the vertex's index on its light subpath (>= 2), as a float */
+    clbdpt_float4 ng;   /* xyz: geometric normal */
+    clbdpt_float4 wi;   /* xyz: unit direction toward the previous (specular) vertex */
+    clbdpt_float4 beta; /* xyz: the light subpath's throughput arriving there (power per path) */
+} CausticPhoton;
+
+/* One pass's caustic photons: photons[photon_begin + i] for i in [cells[cell_begin + h],
+ * cells[cell_begin + h + 1]) lie in the grid cells whose hash & cell_mask is h. Cells are
+ * 2 radius wide, so a disk of the radius around a point overlaps at most 2 x 2 x 2 of them. */
+typedef struct {
+    clbdpt_uint photon_begin;
+    clbdpt_uint cell_begin;
+    clbdpt_uint cell_mask;
+    float radius;
+    float inv_cell;    /* 1 / (2 radius) */
+    float estimate_scale; /* 1 / (light subpaths traced for the pass x pi radius^2) */
+    clbdpt_int pad[2];
+} MergeSlice;
+
+/* The hash of grid cell (x, y, z) (Teschner et al. 2003); host and device bin by the same one. */
+inline clbdpt_uint merge_cell_hash(clbdpt_int x, clbdpt_int y, clbdpt_int z) {
+    return ((clbdpt_uint)x * 73856093u) ^ ((clbdpt_uint)y * 19349663u) ^ ((clbdpt_uint)z * 83492791u);
+}
+
 #endif

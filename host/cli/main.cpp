@@ -53,6 +53,8 @@ struct RenderArgs {
     std::string russian_roulette = "auto";  // auto, off or a bounce
     std::string sampler;  // empty: sobol
     std::string adaptive = "on";
+    std::string caustic_merging = "auto";
+    double merge_radius = 1.0;
     std::string aov;
     std::string strategy_images;
     bool unweighted = false;
@@ -252,6 +254,9 @@ std::string image_settings(const RenderArgs& args, const RenderOptions& options)
          << " sampler=" << sampler_name(options.sampler)
          << " max_depth=" << options.max_depth << " seed=" << options.seed << " all_features=" << options.all_features
          << " strategy_images=" << int(options.strategy_images) << " debug_nan_pixel=" << options.debug_nan_pixel;
+    // Only where set: checkpoints written before caustic merging existed still resume.
+    if (args.caustic_merging != "auto" || args.merge_radius != 1.0)
+        line << " caustic_merging=" << args.caustic_merging << " merge_radius=" << args.merge_radius;
     if (options.sampler == SamplerKind::ZSobol) line << " spp=" << options.spp;
     return line.str();
 }
@@ -450,6 +455,12 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
                           !resumed && checkpoint_path.empty() && cluster.size() == 1 &&
                           options.sampler != SamplerKind::ZSobol &&
                           options.strategy_images == RenderOptions::StrategyImages::Off;
+    // Caustic merging (cl/caustic_merging.h) in the default's BDPT mixes, the pilot's included
+    // (it weighs them with it), or in bdpt where asked for; the renderers of other integrators
+    // leave it out.
+    options.caustic_merging = (args.caustic_merging == "on" || (args.caustic_merging == "auto" && automatic)) &&
+                              scene_has_merged_caustics(ds);
+    options.merge_radius = args.merge_radius;
     RenderStats pilot_stats;
     StrategyPilot pilot;
     const std::string mix_note =
@@ -656,6 +667,18 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
             a["integrator"] = integrator_name(adaptive_integrator);
         }
         j["adaptive"] = a;
+        nlohmann::json merging;
+        const CausticPhotons* photons = renderer_list.front()->caustic_photons();
+        merging["enabled"] = photons != nullptr;
+        if (photons) {
+            merging["photons"] = photons->photons();
+            merging["passes_traced"] = photons->passes_traced();
+            merging["light_subpaths_per_pass"] = photons->paths_per_pass();
+            merging["radius_first_pass"] = photons->radius(0);
+            merging["radius_last_pass"] = photons->radius(uint32_t(std::max(film.spp, 1) - 1));
+            merging["seconds"] = photons->seconds();
+        }
+        j["caustic_merging"] = merging;
         j["width"] = width;
         j["height"] = height;
         j["spp"] = film.spp;
@@ -743,6 +766,12 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
                      strategy_mix.c_str(), film.spp, width, height, st.seconds, sps * 1e-6, rps * 1e-6,
                      st.program_from_cache ? "cached" : "build", st.build_seconds, output.c_str());
         if (!mix_note.empty()) std::fprintf(stderr, "clbdpt: strategy mix %s\n", mix_note.c_str());
+        if (const CausticPhotons* photons = renderer_list.front()->caustic_photons())
+            std::fprintf(stderr,
+                         "clbdpt: caustic merging: %llu photons from %u passes of %u light subpaths, radius %.3g to "
+                         "%.3g (%.2f s)\n",
+                         (unsigned long long)photons->photons(), photons->passes_traced(), photons->paths_per_pass(),
+                         photons->radius(0), photons->radius(uint32_t(std::max(film.spp, 1) - 1)), photons->seconds());
         if (adaptive_plan.extra_samples > 0)
             std::fprintf(stderr, "clbdpt: adaptive sampling: %.1f%% more samples%s, in %llu pixels (%.2f s)\n",
                          100.0 * double(adaptive_plan.extra_samples) / (double(film.spp) * width * height),
@@ -849,6 +878,16 @@ int main(int argc, char** argv) {
                        "--spp 8 or more, one process, no --time, --checkpoint or --resume; path-traced where the "
                        "pilot chose a BDPT mix and found pt close); off: spp samples for every pixel")
         ->check(CLI::IsMember({"on", "off"}));
+    render->add_option("--caustic-merging", args.caustic_merging,
+                       "auto (default): on where --integrator auto chose a BDPT mix; on: with --integrator bdpt too; "
+                       "off. Caustics seen through mirrors and glass (paths that only s = 0 samples) are estimated "
+                       "from each pass's caustic photons instead, in scenes with a mirror or glass, an area light and "
+                       "no media: biased by a blur of about --merge-radius pixels that shrinks as passes accumulate")
+        ->check(CLI::IsMember({"auto", "on", "off"}));
+    render->add_option("--merge-radius", args.merge_radius,
+                       "Caustic merging's radius in pixel footprints at the scene's centre, for the first pass "
+                       "(default 1; pass q's is (q + 1)^(-1/6) of it)")
+        ->check(CLI::Range(1e-3, 1e3));
     render->add_option("--aov", args.aov, "Debug render of the first hit: normal, albedo or depth")
         ->check(CLI::IsMember({"normal", "albedo", "depth"}));
     render->add_option("--strategy-images", args.strategy_images,

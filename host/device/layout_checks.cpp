@@ -148,6 +148,21 @@ CLBDPT_CHECK_FIELD(SplatRecord, g, 4);
 CLBDPT_CHECK_FIELD(SplatRecord, b, 8);
 CLBDPT_CHECK_FIELD(SplatRecord, pixel, 12);
 
+CLBDPT_CHECK_STRUCT(CausticPhoton, 64, 16);
+CLBDPT_CHECK_FIELD(CausticPhoton, p, 0);
+CLBDPT_CHECK_FIELD(CausticPhoton, ng, 16);
+CLBDPT_CHECK_FIELD(CausticPhoton, wi, 32);
+CLBDPT_CHECK_FIELD(CausticPhoton, beta, 48);
+
+CLBDPT_CHECK_STRUCT(MergeSlice, 32, 4);
+CLBDPT_CHECK_FIELD(MergeSlice, photon_begin, 0);
+CLBDPT_CHECK_FIELD(MergeSlice, cell_begin, 4);
+CLBDPT_CHECK_FIELD(MergeSlice, cell_mask, 8);
+CLBDPT_CHECK_FIELD(MergeSlice, radius, 12);
+CLBDPT_CHECK_FIELD(MergeSlice, inv_cell, 16);
+CLBDPT_CHECK_FIELD(MergeSlice, estimate_scale, 20);
+CLBDPT_CHECK_FIELD(MergeSlice, pad, 24);
+
 #undef CLBDPT_CHECK_STRUCT
 #undef CLBDPT_CHECK_FIELD
 

@@ -77,6 +77,11 @@ constexpr int kMinItemsPerCollectThread = 16384;
 
 // render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, camera_out, splats, run_pixels[, strategy_out])
 constexpr cl_uint kParamsArg = SceneBuffers::kSceneArgCount;
+// With caustic merging (never with strategy images): photons, cells, slices, slice count.
+constexpr cl_uint kMergeArg = kParamsArg + 4;
+// Passes with caustic photons of their own (their memory: on cornell-specular at 256 x 256, about
+// 2 000 photons of 64 bytes each).
+constexpr uint32_t kMaxMergePasses = 256;
 
 }  // namespace
 
@@ -114,6 +119,10 @@ Renderer::Renderer(DeviceContext& device, const DeviceScene& scene, const Render
             stats_.defines.push_back("STRATEGY_IMAGES_UNWEIGHTED");
         strategy_slots_ = (options.max_depth + 2) * (options.max_depth + 3);
     }
+    const bool merging = options.caustic_merging && options.integrator == Integrator::Bdpt &&
+                         options.strategy_images == RenderOptions::StrategyImages::Off &&
+                         scene_has_merged_caustics(scene);
+    if (merging) stats_.defines.push_back("HAS_CAUSTIC_MERGING");
     if (options.pt_from_subpaths && options.integrator == Integrator::Pt) stats_.defines.push_back("PT_FROM_SUBPATHS");
     if (options.debug_nan_pixel >= 0) stats_.defines.push_back("DEBUG_NAN_PIXEL=" + std::to_string(options.debug_nan_pixel));
     const ProgramBuild& build = device.program("kernels/render.cl", stats_.defines);
@@ -161,6 +170,17 @@ Renderer::Renderer(DeviceContext& device, const DeviceScene& scene, const Render
         run_pixels_ = cl::Buffer(ctx, CL_MEM_READ_ONLY, sizeof(cl_int));  // no list yet: never read
         kernel_.setArg(kParamsArg + 3, run_pixels_);
         if (strategy_slots_ > 0) kernel_.setArg(kParamsArg + 4, slots_[0].strategy_out);
+        if (merging) {
+            // Photons of their own for the first kMaxMergePasses passes; later passes reuse them.
+            const uint32_t passes = options.time_budget > 0 ? kMaxMergePasses
+                                                            : uint32_t(std::clamp(options.spp, 1, int(kMaxMergePasses)));
+            const auto photons_start = std::chrono::steady_clock::now();
+            caustic_photons_ = std::make_unique<CausticPhotons>(device, build.program, *scene_buffers_, scene,
+                                                                options.seed, passes, options.merge_radius, local_size_);
+            stats_.build_seconds +=
+                std::chrono::duration<double>(std::chrono::steady_clock::now() - photons_start).count();
+            caustic_photons_->set_args(kernel_, kMergeArg);
+        }
         if (local_size_ > 0) {
             // PoCL compiles the work-group function of a kernel at its first launch: do that
             // now, with an empty launch, so it counts as build time and not as render time.
@@ -238,6 +258,14 @@ Error Renderer::rendering_failure(const cl::Error& e) const {
 void Renderer::enqueue_launch(LaunchSlot& slot, const RenderParams& params, int item_count) {
     cl::CommandQueue& queue = device_.queue();
     try {
+        if (caustic_photons_) {
+            // The passes of the launch's samples (item i: sample index + i / run_length).
+            const uint32_t first = params.sample_index + (params.run_length > 0 ? params.first_pixel / params.run_length : 0);
+            const uint32_t last = params.sample_index +
+                                  (params.run_length > 0 ? (params.first_pixel + item_count - 1) / params.run_length : 0);
+            caustic_photons_->ensure(first, last);
+            caustic_photons_->set_args(kernel_, kMergeArg);
+        }
         kernel_.setArg(kParamsArg, params);
         kernel_.setArg(kParamsArg + 1, slot.camera_out);
         kernel_.setArg(kParamsArg + 2, slot.splats);

@@ -16,6 +16,7 @@
 #include "device/pinned_host_array.h"
 #include "film/film.h"
 #include "film/rendered_items.h"
+#include "render/caustic_photons.h"
 #include "render/device_scene.h"
 #include "render/features.h"
 #include "render/scene_buffers.h"
@@ -53,6 +54,12 @@ struct RenderOptions {
     // it; with drop_non_finite the sample (its pixel value and its splats) is left out and
     // counted in RenderStats instead, so a long render survives it (the command line).
     bool drop_non_finite = false;
+    // bdpt: caustics seen through mirrors and glass, which only s = 0 samples, estimated from
+    // each pass's caustic photons instead (cl/caustic_merging.h), where the scene has them
+    // (scene_has_merged_caustics) and strategy images are off; the merge radius in pixel
+    // footprints at the scene's centre (render/caustic_photons.h).
+    bool caustic_merging = false;
+    double merge_radius = 1.0;
     // Tests and benchmarks only: the path tracer built as bdpt builds its strategies, from a
     // stored camera subpath (cl/kernels/render.cl, PT_FROM_SUBPATHS), instead of one vertex at
     // a time. The two give the same image bit for bit on PoCL (tests/path_tracer_test.cpp).
@@ -195,6 +202,8 @@ public:
     void reset_counters();
     const DeviceContext& device() const { return device_; }
     const DeviceScene& scene() const { return scene_; }
+    // The caustic photons this renderer merges with; null without caustic merging.
+    const CausticPhotons* caustic_photons() const { return caustic_photons_.get(); }
 
 private:
     // One launch's outputs: its device buffers, their host copies, and the events that say
@@ -261,6 +270,7 @@ private:
     int zsobol_log2_spp_ = 0, zsobol_base4_digits_ = 0;
     int splat_slots_ = 0;
     int strategy_slots_ = 0;
+    std::unique_ptr<CausticPhotons> caustic_photons_;  // with caustic merging
 };
 
 }  // namespace clbdpt
