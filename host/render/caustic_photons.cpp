@@ -43,9 +43,12 @@ bool scene_has_merged_caustics(const DeviceScene& scene) {
 }
 
 CausticPhotons::CausticPhotons(DeviceContext& device, const cl::Program& program, const SceneBuffers& buffers,
-                               const DeviceScene& scene, uint32_t seed, uint32_t slice_count, double radius_pixels,
+                               const DeviceScene& scene, uint32_t seed, int planned_passes, double radius_pixels,
                                int local_size)
-    : device_(device), seed_(seed), slice_count_(std::max<uint32_t>(1, slice_count)), local_size_(local_size) {
+    : device_(device),
+      seed_(seed),
+      slice_count_(planned_passes > 0 ? std::min(uint32_t(planned_passes), kMaxPasses) : kMaxPasses),
+      local_size_(local_size) {
     const Camera& camera = scene.camera;
     paths_per_slice_ = uint32_t(std::max(1.0, std::ceil(kPathsPerPixel * camera.width * camera.height)));
     // One pixel's footprint at the scene centre's distance from the camera.

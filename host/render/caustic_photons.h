@@ -6,8 +6,8 @@
 // passes are split between launches or devices (each device traces the passes it renders).
 // The radius shrinks with the pass, r_q = r_0 (q + 1)^(-1/6) (progressive photon mapping's
 // alpha = 2/3), so the blur's bias fades as passes accumulate; r_0 is a number of pixel
-// footprints at the distance of the scene's centre from the camera. At most 256 passes have
-// photons of their own, fewer where their photons would take more than 256 MiB (the first
+// footprints at the distance of the scene's centre from the camera. At most kMaxPasses passes
+// have photons of their own, fewer where their photons would take more than 256 MiB (the first
 // pass's count decides); the passes past them reuse theirs (pass i takes pass i % count's).
 #pragma once
 
@@ -27,12 +27,15 @@ bool scene_has_merged_caustics(const DeviceScene& scene);
 class CausticPhotons {
 public:
     // program: built with HAS_CAUSTIC_MERGING (its trace_caustic_photons kernel), whose work-group
-    // function is compiled here (an empty launch) at local_size (0: the driver's). slice_count:
-    // passes with photons of their own; sample index i uses pass i % slice_count's (adaptive
-    // sampling's extra samples, past the passes, reuse the passes' photons).
+    // function is compiled here (an empty launch) at local_size (0: the driver's). planned_passes:
+    // the render's passes (0: not known ahead). The first min(planned_passes, kMaxPasses) passes
+    // (kMaxPasses if not known) have photons of their own, fewer if the memory budget says so;
+    // sample index i uses pass i % that many's (adaptive sampling's extra samples, past the
+    // passes, reuse the passes' photons).
     CausticPhotons(DeviceContext& device, const cl::Program& program, const SceneBuffers& buffers,
-                   const DeviceScene& scene, uint32_t seed, uint32_t slice_count, double radius_pixels,
+                   const DeviceScene& scene, uint32_t seed, int planned_passes, double radius_pixels,
                    int local_size);
+    static constexpr uint32_t kMaxPasses = 256;
 
     // Traces the photons of every pass that sample indices [first, last] use and has none yet.
     void ensure(uint32_t first_sample, uint32_t last_sample);

@@ -79,9 +79,6 @@ constexpr int kMinItemsPerCollectThread = 16384;
 constexpr cl_uint kParamsArg = SceneBuffers::kSceneArgCount;
 // With caustic merging (never with strategy images): photons, cells, slices, slice count.
 constexpr cl_uint kMergeArg = kParamsArg + 4;
-// Passes with caustic photons of their own (their memory: on cornell-specular at 256 x 256, about
-// 2 000 photons of 64 bytes each).
-constexpr uint32_t kMaxMergePasses = 256;
 
 }  // namespace
 
@@ -171,9 +168,8 @@ Renderer::Renderer(DeviceContext& device, const DeviceScene& scene, const Render
         kernel_.setArg(kParamsArg + 3, run_pixels_);
         if (strategy_slots_ > 0) kernel_.setArg(kParamsArg + 4, slots_[0].strategy_out);
         if (merging) {
-            // Photons of their own for the first kMaxMergePasses passes; later passes reuse them.
-            const uint32_t passes = options.time_budget > 0 ? kMaxMergePasses
-                                                            : uint32_t(std::clamp(options.spp, 1, int(kMaxMergePasses)));
+            // A time-bound render's passes are not known ahead.
+            const int passes = options.time_budget > 0 ? 0 : std::max(options.spp, 1);
             const auto photons_start = std::chrono::steady_clock::now();
             caustic_photons_ = std::make_unique<CausticPhotons>(device, build.program, *scene_buffers_, scene,
                                                                 options.seed, passes, options.merge_radius, local_size_);
