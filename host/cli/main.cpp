@@ -675,7 +675,7 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
             merging["passes_traced"] = photons->passes_traced();
             merging["light_subpaths_per_pass"] = photons->paths_per_pass();
             merging["radius_first_pass"] = photons->radius(0);
-            merging["radius_last_pass"] = photons->radius(uint32_t(std::max(film.spp, 1) - 1));
+            merging["radius_smallest"] = photons->smallest_radius(film.spp);
             merging["seconds"] = photons->seconds();
         }
         j["caustic_merging"] = merging;
@@ -771,7 +771,7 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
                          "clbdpt: caustic merging: %llu photons from %u passes of %u light subpaths, radius %.3g to "
                          "%.3g (%.2f s)\n",
                          (unsigned long long)photons->photons(), photons->passes_traced(), photons->paths_per_pass(),
-                         photons->radius(0), photons->radius(uint32_t(std::max(film.spp, 1) - 1)), photons->seconds());
+                         photons->radius(0), photons->smallest_radius(film.spp), photons->seconds());
         if (adaptive_plan.extra_samples > 0)
             std::fprintf(stderr, "clbdpt: adaptive sampling: %.1f%% more samples%s, in %llu pixels (%.2f s)\n",
                          100.0 * double(adaptive_plan.extra_samples) / (double(film.spp) * width * height),

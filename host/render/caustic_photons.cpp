@@ -101,6 +101,10 @@ double CausticPhotons::radius(uint32_t pass) const {
     return radius0_ * std::pow(double(pass % slice_count_) + 1.0, -1.0 / 6.0);
 }
 
+double CausticPhotons::smallest_radius(int passes) const {
+    return radius(std::min(uint32_t(std::max(passes, 1)), slice_count_) - 1);
+}
+
 void CausticPhotons::ensure(uint32_t first_sample, uint32_t last_sample) {
     bool changed = false;
     if (traced_ == 0) {

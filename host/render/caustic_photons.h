@@ -44,6 +44,8 @@ public:
 
     uint32_t paths_per_pass() const { return paths_per_slice_; }
     double radius(uint32_t pass) const;
+    // The smallest radius of a render of `passes` passes: its last pass's with photons of its own.
+    double smallest_radius(int passes) const;
     uint64_t photons() const { return photons_.size(); }
     uint32_t passes_traced() const { return traced_; }
     // Passes with photons of their own (sample index i uses pass i % this many's).
