@@ -25,19 +25,27 @@
 
 #include "vertex.h"
 
+/* Whether camera vertex k is where merging takes a path over: a non-specular surface vertex,
+ * k >= 2, whose predecessor is specular, with no two non-specular neighbours among the vertices
+ * before it (the camera vertex counts as non-specular), so that no strategy splits the path
+ * before it. Both sides of the split between s = 0 and the photons ask this. */
+inline int is_caustic_merge_vertex(const SceneData* scene, const PathVertex* camera_path, int k) {
+    const PathVertex* v = &camera_path[k];
+    if (k < 2 || !camera_path[k - 1].delta || v->type != VERTEX_SURFACE || !vertex_is_connectible(scene, v)) return 0;
+    for (int i = 1; i < k - 1; ++i)
+        if (!camera_path[i - 1].delta && !camera_path[i].delta) return 0;
+    return 1;
+}
+
 /* Whether camera_path[0 .. t - 1], ending on an emitter (strategy s = 0), is one of the paths
  * the photons take over: the vertex before the emitter is specular, and so is every vertex back
- * to the last non-specular one x_k, k >= 2, before which no two neighbours are both
- * non-specular (the camera vertex counts as non-specular). */
-inline int merged_by_caustic_photons(const PathVertex* camera_path, int t) {
+ * to the last non-specular one, which is a merge vertex. */
+inline int merged_by_caustic_photons(const SceneData* scene, const PathVertex* camera_path, int t) {
     int e = t - 1;
     if (e < 4 || camera_path[e].type != VERTEX_SURFACE || !camera_path[e - 1].delta) return 0;
     int k = e - 1;
     while (camera_path[k].delta) --k; /* stops at the camera vertex at the latest */
-    if (k < 2 || camera_path[k].type != VERTEX_SURFACE || !camera_path[k - 1].delta) return 0;
-    for (int i = 1; i < k; ++i)
-        if (!camera_path[i - 1].delta && !camera_path[i].delta) return 0;
-    return 1;
+    return is_caustic_merge_vertex(scene, camera_path, k);
 }
 
 /* The index of a light subpath's caustic photon: its first non-specular vertex, if that is a
@@ -100,18 +108,15 @@ inline float3 caustic_photon_estimate(const SceneData* scene, const CausticMap* 
 }
 
 /* What the photons of slice `slice_index` add to the camera subpath's pixel: their estimate at
- * every vertex x_k that merged_by_caustic_photons would name as the non-specular vertex (k >= 2,
- * x_(k-1) specular, no two non-specular neighbours before it), times its throughput. */
+ * every merge vertex (is_caustic_merge_vertex), times its throughput. */
 inline float3 caustic_merges(const SceneData* scene, const CausticMap* map, uint slice_index,
                              const PathVertex* camera_path, int n_camera) {
     float3 L = (float3)(0.0f);
-    int split_before = 0; /* two non-specular neighbours among camera_path[0 .. k - 1] */
     for (int k = 2; k < n_camera; ++k) {
-        if (!camera_path[k - 2].delta && !camera_path[k - 1].delta) split_before = 1;
-        if (split_before) break;
-        const PathVertex* v = &camera_path[k];
-        if (!camera_path[k - 1].delta || v->type != VERTEX_SURFACE || !vertex_is_connectible(scene, v)) continue;
-        L += v->beta * caustic_photon_estimate(scene, map, slice_index, v, k);
+        /* Past two non-specular neighbours no later vertex is a merge vertex. */
+        if (!camera_path[k - 2].delta && !camera_path[k - 1].delta) break;
+        if (is_caustic_merge_vertex(scene, camera_path, k))
+            L += camera_path[k].beta * caustic_photon_estimate(scene, map, slice_index, &camera_path[k], k);
     }
     return L;
 }

@@ -63,7 +63,7 @@ inline float3 connect_bdpt(const SceneData* scene, const StrategyMix* mix, Rng* 
         const PathVertex* pt = &camera_path[t - 1];
 #ifdef HAS_CAUSTIC_MERGING
         /* The pass's caustic photons estimate these paths instead (render.cl). */
-        if (merged_by_caustic_photons(camera_path, t)) return L;
+        if (merged_by_caustic_photons(scene, camera_path, t)) return L;
 #endif
         if (vertex_is_light(pt)) L = vertex_le(scene, pt, &camera_path[t - 2]) * pt->beta;
     } else if (t == 1) {

@@ -31,9 +31,12 @@ typedef struct {
      * RenderParams' in the render kernel, RUSSIAN_ROULETTE_OFF in every other. */
     int roulette_camera_from;
     int roulette_light_from;
+#ifdef HAS_CAUSTIC_MERGING
     /* Set by the caustic photon kernel alone: a walk ends at its first non-specular vertex
-     * (cl/walk.h), which is all that kernel keeps. */
+     * (cl/walk.h), which is all that kernel keeps. The kernels of scenes without merging have
+     * neither the field nor the test. */
     int walk_ends_at_scattering;
+#endif
 } SceneData;
 
 /* The kernel arguments every light-transport kernel takes, in this order (the host sets them
@@ -82,7 +85,9 @@ inline SceneData scene_data(__global const BvhNode* nodes, __global const Triang
     s.rays_traced = rays;
     s.roulette_camera_from = RUSSIAN_ROULETTE_OFF;
     s.roulette_light_from = RUSSIAN_ROULETTE_OFF;
+#ifdef HAS_CAUSTIC_MERGING
     s.walk_ends_at_scattering = 0;
+#endif
     return s;
 }
 

@@ -157,7 +157,9 @@ inline int random_walk(const SceneData* scene, Rng* rng, float3 o, float3 d, flo
 #endif
         ++i;
         if (vertex->type == VERTEX_LIGHT || i == end) break;
+#ifdef HAS_CAUSTIC_MERGING
         if (scene->walk_ends_at_scattering && vertex_is_connectible(scene, vertex)) break;
+#endif
 
         int bounce = i - 1 - start;
         if ((bounce & 1) == 0) {

@@ -143,7 +143,7 @@ TEST(SceneAgreement, RussianRouletteKeepsTheImage) {
 //     numbers, so the difference is the photons' estimate less s = 0's of the same paths, 0 in
 //     expectation, with a standard error far below the image's (on a 96 x 96 film). Measured:
 //     s = 0 left in as well (those paths counted twice) or the photons' estimate left out make
-//     the image mean differ by 25 and 7.0 standard errors (+0.30% and -0.29% of it);
+//     the image mean differ by 21 and 7.0 standard errors (+0.30% and -0.29% of it);
 //   - against pt, like the mixes above (the blur of the merge moves little energy across the
 //     10 x 10-pixel regions).
 TEST(SceneAgreement, CausticMergingKeepsTheImage) {

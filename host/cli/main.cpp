@@ -456,10 +456,9 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
                           options.sampler != SamplerKind::ZSobol &&
                           options.strategy_images == RenderOptions::StrategyImages::Off;
     // Caustic merging (cl/caustic_merging.h) in the default's BDPT mixes, the pilot's included
-    // (it weighs them with it), or in bdpt where asked for; the renderers of other integrators
-    // leave it out.
-    options.caustic_merging = (args.caustic_merging == "on" || (args.caustic_merging == "auto" && automatic)) &&
-                              scene_has_merged_caustics(ds);
+    // (it weighs them with it), or in bdpt where asked for; the renderers of other integrators,
+    // and of scenes without such paths, leave it out (Renderer).
+    options.caustic_merging = args.caustic_merging == "on" || (args.caustic_merging == "auto" && automatic);
     options.merge_radius = args.merge_radius;
     RenderStats pilot_stats;
     StrategyPilot pilot;
