@@ -90,10 +90,15 @@ inline void mis_fill_light_tails(const SceneData* scene, const StrategyMix* mix,
  * sampled: the vertex the connection sampled afresh (camera vertex for t = 1, light vertex for
  * s = 1), ignored otherwise.
  * to_qs, to_pt: with media, the distance-sampling densities of the connecting segment toward
- * its light-side and camera-side ends (cl/medium.h; 1 in vacuum, ignored for s = 0). */
-inline float mis_weight(const SceneData* scene, const StrategyMix* mix, const PathVertex* light_path,
-                        const PathVertex* camera_path, const PathVertex* sampled, int s, int t, float to_qs,
-                        float to_pt) {
+ * its light-side and camera-side ends (cl/medium.h; 1 in vacuum, ignored for s = 0).
+ * outer_share: null, or where to store the sum of the weights of the mix's outer strategies
+ * (s <= 1 or t = 1, those of a mix without inner connections) for the same path: the share
+ * of it that such a mix would take on (host/render/strategy_pilot.h, subset moments). It
+ * needs each strategy's term, so the subpaths' tails are not used. */
+inline float mis_weight_and_outer_share(const SceneData* scene, const StrategyMix* mix,
+                                        const PathVertex* light_path, const PathVertex* camera_path,
+                                        const PathVertex* sampled, int s, int t, float to_qs, float to_pt,
+                                        float* outer_share) {
     /* The connection's endpoints: t = 1 replaces the camera vertex and (otherwise) s = 1 the
      * light vertex with the freshly sampled one; the subpath arrays are not read there (a path
      * tracer has no light subpath at all). */
@@ -153,14 +158,14 @@ inline float mis_weight(const SceneData* scene, const StrategyMix* mix, const Pa
 
     /* With sample counts n_i (cl/strategies.h) each term is n_i p_i / (n_s p_s). */
     float inv_count = 1.0f / strategy_sample_count(mix, s, t);
-    float sum_ri = 0.0f;
+    float sum_ri = 0.0f, sum_outer = 0.0f;
     /* Camera side: r_i for strategies (s + t - i, i), i = t-1 .. 1. Vertex i's reverse density
      * is a convention when vertex i+1 is a delta vertex of the subpath (the connection's pt is
      * not), its forward density when vertex i-1 is. */
     float ri = 1.0f;
     for (int i = t - 1; i >= t - camera_steps; --i) {
 #if STRATEGIES_READ_SUBPATH_PDF_REV
-        if (i <= t - 3) { /* the subpath's own tail (mis_fill_camera_tails); ri is r_{t-2} */
+        if (i <= t - 3 && !outer_share) { /* the subpath's own tail (mis_fill_camera_tails); ri is r_{t-2} */
             if (camera_path[i].mis_tail > 0.0f) sum_ri += ri * camera_path[i].mis_tail * inv_count;
             break;
         }
@@ -175,6 +180,7 @@ inline float mis_weight(const SceneData* scene, const StrategyMix* mix, const Pa
             float term = ri * strategy_sample_count(mix, s + t - i, i) * inv_count;
             if (s + t - i == 1 && i >= 2) term *= s1_scale;
             sum_ri += term;
+            if (s + t - i <= 1 || i == 1) sum_outer += term;
         }
     }
     /* Light side: r_i for strategies (i, s + t - i), i = s-1 .. 0, with the same conventions;
@@ -183,7 +189,7 @@ inline float mis_weight(const SceneData* scene, const StrategyMix* mix, const Pa
     ri = 1.0f;
     for (int i = s - 1; i >= s - light_steps; --i) {
 #if STRATEGIES_READ_SUBPATH_PDF_REV
-        if (i <= s - 3) { /* the subpath's own tail (mis_fill_light_tails) */
+        if (i <= s - 3 && !outer_share) { /* the subpath's own tail (mis_fill_light_tails) */
             if (light_path[i].mis_tail > 0.0f) sum_ri += ri * light_path[i].mis_tail * inv_count;
             break;
         }
@@ -200,10 +206,21 @@ inline float mis_weight(const SceneData* scene, const StrategyMix* mix, const Pa
             float term = ri * strategy_sample_count(mix, i, s + t - i) * inv_count;
             if (i == 1 && s + t - 1 >= 2) term *= s1_scale;
             sum_ri += term;
+            if (i <= 1) sum_outer += term;
         }
     }
-    if (s == 1 && t >= 2) sum_ri /= s1_scale;
+    if (s == 1 && t >= 2) {
+        sum_ri /= s1_scale;
+        sum_outer /= s1_scale;
+    }
+    if (outer_share) *outer_share = ((s <= 1 || t == 1 ? 1.0f : 0.0f) + sum_outer) / (1.0f + sum_ri);
     return 1.0f / (1.0f + sum_ri);
+}
+
+inline float mis_weight(const SceneData* scene, const StrategyMix* mix, const PathVertex* light_path,
+                        const PathVertex* camera_path, const PathVertex* sampled, int s, int t, float to_qs,
+                        float to_pt) {
+    return mis_weight_and_outer_share(scene, mix, light_path, camera_path, sampled, s, t, to_qs, to_pt, 0);
 }
 
 #endif

@@ -40,7 +40,7 @@
         F(RenderParams, zsobol_log2_spp) F(RenderParams, zsobol_base4_digits) F(RenderParams, run_pixel) \
         F(RenderParams, run_length) F(RenderParams, light_to_lens) F(RenderParams, run_listed)           \
         F(RenderParams, roulette_camera_from) F(RenderParams, roulette_light_from)                \
-        F(RenderParams, camera_image_only)                                                        \
+        F(RenderParams, camera_image_only) F(RenderParams, subset_moments) F(RenderParams, pad)   \
     S(SplatRecord) F(SplatRecord, r) F(SplatRecord, g) F(SplatRecord, b) F(SplatRecord, pixel)     \
     S(CausticPhoton) F(CausticPhoton, p) F(CausticPhoton, ng) F(CausticPhoton, wi) F(CausticPhoton, beta) \
     S(MergeSlice) F(MergeSlice, photon_begin) F(MergeSlice, cell_begin) F(MergeSlice, cell_mask)   \

@@ -45,7 +45,8 @@
 #define STRATEGY_SLOTS ((MAX_DEPTH + 2) * STRATEGY_STRIDE)
 
 __kernel void render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, __global float4* camera_out,
-                          __global SplatRecord* splats, __global const int* run_pixels
+                          __global SplatRecord* splats, __global const int* run_pixels,
+                          __global float2* subset_moments
 #ifdef HAS_CAUSTIC_MERGING
                           , __global const CausticPhoton* photons, __global const uint* merge_cells,
                           __global const MergeSlice* merge_slices, uint merge_slice_count
@@ -132,6 +133,13 @@ __kernel void render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, __global float
 
     float3 L = (float3)(0.0f);
     int bad_strategy = -1;
+    /* params.subset_moments (the strategy pilot's passes of full bdpt): the sum of the sample's
+     * squared contributions (summed over the channels) and the same with each divided by the
+     * share of its MIS weights that the outer strategies have (cl/mis.h): an estimate of the
+     * sum that a mix without inner connections would have for the same paths, which sees the
+     * paths that such a mix samples rarely and so its own passes miss. */
+    float2 moments = (float2)(0.0f);
+    float outer_share = 1.0f;
 #ifdef HAS_CAUSTIC_MERGING
     /* The pass's photons (its slice) stand in for s = 0 on caustics seen through specular
      * vertices (cl/caustic_merging.h); a non-finite estimate is reported as strategy 0. */
@@ -155,7 +163,7 @@ __kernel void render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, __global float
                 float2 splat_raster;
                 float weight;
                 float3 unweighted = connect_bdpt(&scene, &mix, &rng, light_path, camera_path, s, t, g,
-                                                 &splat_raster, &weight);
+                                                 &splat_raster, &weight, params.subset_moments ? &outer_share : 0);
 #ifdef DEBUG_NAN_PIXEL
                 /* Every strategy the sample tries, whether or not its connection carries light. */
                 if (pixel == DEBUG_NAN_PIXEL && sample_index == 0) unweighted = (float3)(NAN);
@@ -168,6 +176,13 @@ __kernel void render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, __global float
                  * cost PoCL 15% of a path tracer's samples per second). */
                 float probe = c.x + c.y + c.z;
                 if (probe - probe != 0.0f && bad_strategy < 0) bad_strategy = s * STRATEGY_STRIDE + t;
+                if (params.subset_moments) {
+                    float squared = c.x * c.x + c.y * c.y + c.z * c.z;
+                    moments.x += squared;
+                    /* A share of 0: the mix cannot make the path at all (a delta light by way of
+                     * a mirror; the pilot leaves that mix out there). */
+                    if (outer_share > 0.0f) moments.y += squared / outer_share;
+                }
                 int target = pixel;
                 if (t == 1) {
                     int sx = min((int)splat_raster.x, params.width - 1);
@@ -211,6 +226,7 @@ __kernel void render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, __global float
     }
 #endif
     camera_out[gid] = (float4)(L.x, L.y, L.z, bad_strategy < 0 ? (float)rays_traced : -1.0f - (float)bad_strategy);
+    if (params.subset_moments) subset_moments[gid] = moments;
 #endif
 }
 

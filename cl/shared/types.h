@@ -248,6 +248,10 @@ typedef struct {
      * and traces none. Its camera image is the same bit for bit (its strategies, s <= 1, draw
      * nothing of the light subpath's and are weighed by the mix as before). */
     clbdpt_int camera_image_only;
+    /* 1: the launch also writes each item's subset moments (render.cl's subset_moments
+     * argument; bdpt only): the strategy pilot's passes of full bdpt. */
+    clbdpt_int subset_moments;
+    clbdpt_int pad[3]; /* to a multiple of 16 bytes */
 } RenderParams;
 
 /* Work items of a pass with pixel_stride `stride` over a width x height film. */

@@ -644,6 +644,7 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
                                            {"variance_transport_stratified", c.variance_transport_stratified},
                                            {"variance_shared_tail", c.variance_shared_tail},
                                            {"variance_shared_counted", c.variance_shared_counted},
+                                           {"variance_missed", c.variance_missed},
                                            {"variance_pixel", c.variance_pixel},
                                            {"adaptive_variance_left", c.adaptive_variance_left},
                                            {"adaptive_extra_share", c.adaptive_extra_share},
@@ -746,11 +747,11 @@ int run_render(const RenderArgs& args, Cluster& cluster) {
         for (const StrategyCandidate& c : pilot.candidates)
             std::fprintf(stderr,
                          "clbdpt: pilot: %-56s variance per sample: transport %.3g +- %.2g (stratified %.3g, "
-                         "shared tail %.3g, of which counted %.3g, light image %.3g), pixel %.3g; adaptive leaves %.2f for %.1f%% more "
+                         "shared tail %.3g, of which counted %.3g, light image %.3g, missed by its passes %.3g), pixel %.3g; adaptive leaves %.2f for %.1f%% more "
                          "samples; %.3f s/pass; predicted MSE %.3g at %.0f spp; efficiency %.3g%s\n",
                          c.name.c_str(), c.variance_transport, c.variance_transport_standard_error,
                          c.variance_transport_stratified, c.variance_shared_tail, c.variance_shared_counted,
-                         c.variance_light_image,
+                         c.variance_light_image, c.variance_missed,
                          c.variance_pixel, c.adaptive_variance_left, 100.0 * c.adaptive_extra_share,
                          c.seconds_per_pass, c.predicted_mse, c.predicted_spp, c.efficiency,
                          &c == &pilot.choice() ? "  <- chosen" : "");

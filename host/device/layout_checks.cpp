@@ -120,7 +120,7 @@ CLBDPT_CHECK_FIELD(SceneInfo, node_count, 36);
 CLBDPT_CHECK_FIELD(SceneInfo, camera_medium, 40);
 CLBDPT_CHECK_FIELD(SceneInfo, area_light_count, 44);
 
-CLBDPT_CHECK_STRUCT(RenderParams, 80, 4);
+CLBDPT_CHECK_STRUCT(RenderParams, 96, 4);
 CLBDPT_CHECK_FIELD(RenderParams, width, 0);
 CLBDPT_CHECK_FIELD(RenderParams, height, 4);
 CLBDPT_CHECK_FIELD(RenderParams, first_pixel, 8);
@@ -141,6 +141,8 @@ CLBDPT_CHECK_FIELD(RenderParams, run_listed, 64);
 CLBDPT_CHECK_FIELD(RenderParams, roulette_camera_from, 68);
 CLBDPT_CHECK_FIELD(RenderParams, roulette_light_from, 72);
 CLBDPT_CHECK_FIELD(RenderParams, camera_image_only, 76);
+CLBDPT_CHECK_FIELD(RenderParams, subset_moments, 80);
+CLBDPT_CHECK_FIELD(RenderParams, pad, 84);
 
 CLBDPT_CHECK_STRUCT(SplatRecord, 16, 4);
 CLBDPT_CHECK_FIELD(SplatRecord, r, 0);

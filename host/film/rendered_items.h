@@ -53,6 +53,10 @@ struct RenderedItems {
     // Light-image splats as the kernel wrote them (none with pixel < 0), in the order they are
     // added.
     std::vector<SplatRecord> splats;
+    // Per item, where the pass asked for them (PassSpec::subset_moments): the sum of its
+    // contributions' squares and the same with each divided by the share of its MIS weights
+    // that a mix without inner connections keeps (cl/kernels/render.cl). Else empty.
+    std::vector<float> subset_moments;
     // Strategy-image records (strategy images on): the strategy's slot and the record.
     struct StrategySplat {
         int slot;

@@ -75,10 +75,13 @@ constexpr int kMinLaunchGroups = 64;
 constexpr int kMaxCollectThreads = 8;
 constexpr int kMinItemsPerCollectThread = 16384;
 
-// render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, camera_out, splats, run_pixels[, strategy_out])
+// render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, camera_out, splats, run_pixels, subset_moments
+//             [, strategy_out])
 constexpr cl_uint kParamsArg = SceneBuffers::kSceneArgCount;
+constexpr cl_uint kSubsetMomentsArg = kParamsArg + 4;
+constexpr cl_uint kStrategyArg = kParamsArg + 5;
 // With caustic merging (never with strategy images): photons, cells, slices, slice count.
-constexpr cl_uint kMergeArg = kParamsArg + 4;
+constexpr cl_uint kMergeArg = kParamsArg + 5;
 
 }  // namespace
 
@@ -166,7 +169,9 @@ Renderer::Renderer(DeviceContext& device, const DeviceScene& scene, const Render
         kernel_.setArg(kParamsArg + 2, slots_[0].splats);
         run_pixels_ = cl::Buffer(ctx, CL_MEM_READ_ONLY, sizeof(cl_int));  // no list yet: never read
         kernel_.setArg(kParamsArg + 3, run_pixels_);
-        if (strategy_slots_ > 0) kernel_.setArg(kParamsArg + 4, slots_[0].strategy_out);
+        no_subset_moments_ = cl::Buffer(ctx, CL_MEM_WRITE_ONLY, sizeof(cl_float2));  // never written
+        kernel_.setArg(kSubsetMomentsArg, no_subset_moments_);
+        if (strategy_slots_ > 0) kernel_.setArg(kStrategyArg, slots_[0].strategy_out);
         if (merging) {
             // A time-bound render's passes are not known ahead.
             const int passes = options.time_budget > 0 ? 0 : std::max(options.spp, 1);
@@ -241,6 +246,7 @@ RenderParams Renderer::batch_params(const PassSpec& pass, int first_item, int it
     params.roulette_camera_from = options_.roulette_camera_from;
     params.roulette_light_from = options_.roulette_light_from;
     params.camera_image_only = pass.camera_image_only ? 1 : 0;
+    params.subset_moments = pass.subset_moments && bdpt ? 1 : 0;
     return params;
 }
 
@@ -266,7 +272,13 @@ void Renderer::enqueue_launch(LaunchSlot& slot, const RenderParams& params, int 
         kernel_.setArg(kParamsArg + 1, slot.camera_out);
         kernel_.setArg(kParamsArg + 2, slot.splats);
         kernel_.setArg(kParamsArg + 3, run_pixels_);
-        if (strategy_slots_ > 0) kernel_.setArg(kParamsArg + 4, slot.strategy_out);
+        if (params.subset_moments && slot.subset_moments_host.size() == 0) {
+            // Only the pilot's passes of full bdpt ask for them: made at the first.
+            slot.subset_moments = cl::Buffer(device_.context(), CL_MEM_WRITE_ONLY, sizeof(cl_float2) * batch_items_);
+            slot.subset_moments_host = PinnedHostArray<cl_float2>(device_.context(), queue, size_t(batch_items_));
+        }
+        kernel_.setArg(kSubsetMomentsArg, params.subset_moments ? slot.subset_moments : no_subset_moments_);
+        if (strategy_slots_ > 0) kernel_.setArg(kStrategyArg, slot.strategy_out);
         slot.enqueued = std::chrono::steady_clock::now();
         if (local_size_ > 0) {
             const size_t local = size_t(local_size_);
@@ -286,6 +298,10 @@ void Renderer::enqueue_launch(LaunchSlot& slot, const RenderParams& params, int 
             queue.enqueueReadBuffer(slot.strategy_out, CL_FALSE, 0,
                                     sizeof(SplatRecord) * size_t(item_count) * strategy_slots_,
                                     slot.strategy_host.data(), nullptr, &slot.strategies_read);
+        slot.with_subset_moments = params.subset_moments != 0;
+        if (slot.with_subset_moments)
+            queue.enqueueReadBuffer(slot.subset_moments, CL_FALSE, 0, sizeof(cl_float2) * item_count,
+                                    slot.subset_moments_host.data(), nullptr, &slot.subset_moments_read);
         queue.flush();
     } catch (const cl::Error& e) {
         throw rendering_failure(e);
@@ -297,6 +313,7 @@ void Renderer::finish_launch(RenderedItems& out, const PassSpec& pass, const InF
     try {
         // The queue is in order: the last read being in means the kernel and the other reads are.
         (strategy_slots_ > 0 ? slot.strategies_read : splat_slots_ > 0 ? slot.splats_read : slot.camera_read).wait();
+        if (slot.with_subset_moments) slot.subset_moments_read.wait();
         if (device_.profiling()) {
             auto seconds = [](const cl::Event& e) {
                 return 1e-9 * double(e.getProfilingInfo<CL_PROFILING_COMMAND_END>() -
@@ -440,6 +457,15 @@ void Renderer::collect(RenderedItems& out, const PassSpec& pass, const LaunchSlo
             out.dropped_items.push_back(offset + i);
         }
     }
+    if (!out.subset_moments.empty())
+        for (int i = 0; i < item_count; ++i) {
+            const cl_float2& m = slot.subset_moments_host[size_t(i)];
+            out.subset_moments[size_t(offset + i) * 2] = m.s[0];
+            out.subset_moments[size_t(offset + i) * 2 + 1] = m.s[1];
+        }
+    for (int i : out.dropped_items)  // a dropped sample's moments are not finite either
+        if (!out.subset_moments.empty() && i >= offset)
+            out.subset_moments[size_t(i) * 2] = out.subset_moments[size_t(i) * 2 + 1] = 0.0f;
     if (strategy_slots_ > 0) {
         auto dropped = std::lower_bound(out.dropped_items.begin(), out.dropped_items.end(), offset);
         for (int i = 0; i < item_count; ++i) {
@@ -520,6 +546,7 @@ RenderedItems Renderer::render_items(const PassSpec& pass, int first_item, int i
     out.dropped_items.clear();
     out.strategy_splats = std::move(reuse.strategy_splats);
     out.strategy_splats.clear();
+    if (pass.subset_moments && options_.integrator == Integrator::Bdpt) out.subset_moments.assign(size_t(item_count) * 2, 0.0f);
     // Light subpaths leave a few splats each (measured: 2-4 at max depth 5 on the bundled
     // scenes); reserving them saves most of the vector's regrowth.
     if (splat_slots_ > 0) out.splats.reserve(size_t(item_count) * std::min(splat_slots_, 4));

@@ -165,6 +165,9 @@ struct PassSpec {
     // Only the camera image is kept (adaptive sampling's extra samples): a bdpt mix without inner
     // connections then traces no light subpaths (RenderParams::camera_image_only).
     bool camera_image_only = false;
+    // bdpt: each item's subset moments are returned too (RenderedItems::subset_moments; the
+    // strategy pilot's passes of full bdpt).
+    bool subset_moments = false;
 };
 
 // Whether bdpt uses the (1,1) strategy, a light point joined straight to the lens, in `scene`:
@@ -214,6 +217,11 @@ private:
         PinnedHostArray<cl_float4> camera_host;
         PinnedHostArray<SplatRecord> splats_host, strategy_host;
         cl::Event kernel_done, camera_read, splats_read, strategies_read;
+        // Made at the first launch that asks for subset moments (PassSpec::subset_moments).
+        cl::Buffer subset_moments;
+        PinnedHostArray<cl_float2> subset_moments_host;
+        cl::Event subset_moments_read;
+        bool with_subset_moments = false;  // the launch in this slot asked for them
         std::chrono::steady_clock::time_point enqueued;
     };
     // A launch in flight: its slot and its items.
@@ -225,6 +233,8 @@ private:
     RenderParams batch_params(const PassSpec& pass, int first_item, int item_count) const;
     // The kernel's pixel list (PassSpec::run_pixels) and the list it holds.
     cl::Buffer run_pixels_;
+    // Bound as the kernel's subset_moments where a launch asks for none.
+    cl::Buffer no_subset_moments_;
     std::shared_ptr<const std::vector<int>> run_pixels_list_;
     // The error a failed OpenCL call while rendering is reported as.
     Error rendering_failure(const cl::Error& e) const;

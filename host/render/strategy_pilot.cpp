@@ -74,6 +74,9 @@ struct GridPass {
     // Over all the pass's splats, wherever they land: their number, the sum of r^2 + g^2 + b^2,
     // and of its square (see LightImageVariance).
     double splats = 0, splat_squares = 0, splat_squares_squared = 0;
+    // Where the pass asked for subset moments (RenderedItems::subset_moments): their sums over
+    // the pass's items, and the number of items.
+    double moment_own = 0, moment_outer = 0, moment_items = 0;
 
     GridPass(int w, int h, int k) : columns((w + k - 1) / k), rows((h + k - 1) / k), camera(size_t(columns) * rows * 3) {}
     int items() const { return columns * rows; }
@@ -90,6 +93,11 @@ struct GridPass {
                 continue;
             }
             for (int c = 0; c < 3; ++c) camera[size_t(r.first_item + i) * 3 + c] += r.camera[size_t(i) * 3 + c];
+            if (!r.subset_moments.empty()) {
+                moment_own += r.subset_moments[size_t(i) * 2];
+                moment_outer += r.subset_moments[size_t(i) * 2 + 1];
+                moment_items += 1;
+            }
         }
         for (const SplatRecord& s : r.splats) {
             const double q = double(s.r) * s.r + double(s.g) * s.g + double(s.b) * s.b;
@@ -483,6 +491,11 @@ double common_shared_variance(const std::vector<double>& shared_tail, const std:
     return common.mean();
 }
 
+// Whether `c` is full bdpt: one light subpath per sample and every connection.
+bool is_full_bdpt(const StrategyCandidate& c) {
+    return c.integrator == Integrator::Bdpt && c.light_subpaths == 1.0f && c.inner_connections;
+}
+
 StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene, const RenderOptions& options,
                                  int spp, double time_budget, bool adaptive, RenderStats* stats) {
     using Clock = std::chrono::steady_clock;
@@ -537,6 +550,9 @@ StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene
                 r->set_light_roulette(c.roulette_light_from);
                 PassSpec pass;
                 pass.pixel_stride = pilot.pixel_stride;
+                // Full bdpt's set x also brings the subset moments (kernel time not counted:
+                // their MIS sums skip the subpaths' tails, 7% of a pass on cornell-specular).
+                pass.subset_moments = is_full_bdpt(c) && round < kPilotSetSize;
                 if (round < 2 * kPilotSetSize) {
                     // Sample j of set x or y: the sampler's j-th sample, so that a set is
                     // stratified as kPilotSetSize samples of the render are.
@@ -549,10 +565,41 @@ StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene
                 }
                 const Clock::time_point pass_start = Clock::now();
                 const RenderedItems rendered = r->render_items(pass, 0, items);
-                seconds[size_t(i)] = std::min(seconds[size_t(i)], seconds_between(pass_start, Clock::now()));
+                if (!pass.subset_moments)
+                    seconds[size_t(i)] = std::min(seconds[size_t(i)], seconds_between(pass_start, Clock::now()));
                 passes[size_t(i)][size_t(round)].add(rendered);
                 stats->add_counts(rendered.counts);
             }
+    };
+    // What the passes of the mix without inner connections (one light subpath per sample, light
+    // roulette as full bdpt's) missed of its variance, from full bdpt's subset moments: their
+    // outer part less full bdpt's own is what the mix adds to full bdpt's variance for the same
+    // paths, among them those that only inner connections sample well (a caustic's light on a
+    // wall seen through glass: the mix has s = 0 alone for them, whose rare large samples a
+    // sparse grid meets too seldom; on cornell-specular its passes measured 0.86-1.09x full
+    // bdpt's variance, where its renders have 1.2x the error of half the light subpaths').
+    // 0 unless both ran (`which`), and where the mix's own passes saw as much.
+    auto missed_without_inner_connections = [&](const std::vector<int>& which, const std::vector<SetVariances>& transport) {
+        int full = -1, outer = -1;
+        for (int i : which) {
+            const StrategyCandidate& c = pilot.candidates[size_t(i)];
+            if (c.roulette_light_from != options.roulette_light_from) continue;
+            if (is_full_bdpt(c)) full = i;
+            if (c.integrator == Integrator::Bdpt && !c.inner_connections && c.light_subpaths == 1.0f) outer = i;
+        }
+        if (full < 0 || outer < 0) return 0.0;
+        double own = 0, outer_moment = 0, items = 0;
+        for (const GridPass& p : passes[size_t(full)]) {
+            own += p.moment_own;
+            outer_moment += p.moment_outer;
+            items += p.moment_items;
+        }
+        if (items <= 0) return 0.0;
+        const double added = std::max(0.0, outer_moment - own) / (3.0 * items);
+        auto transport_variance = [&](int i) {
+            return transport[size_t(i)].one.mean() + light_image_variance(passes[size_t(i)]).mean;
+        };
+        return std::max(0.0, transport_variance(full) + added - transport_variance(outer));
     };
     // The variances, predicted error and efficiency of the candidates `which` (those whose
     // passes ran), from their passes.
@@ -566,6 +613,7 @@ StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene
         const std::vector<double> shared_tail = shared_tail_terms(camera_terms);
         const std::vector<bool> rare_paths = rare_shared_pixels(camera_terms);
         const double shared_counted = kSharedVarianceCounted * common_shared_variance(shared_tail, rare_paths, camera_terms);
+        const double missed_without_inner = missed_without_inner_connections(which, transport);
 
         for (int i : which) {
             StrategyCandidate& c = pilot.candidates[size_t(i)];
@@ -574,6 +622,17 @@ StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene
             const GroupedVariance whole = one_sample_variance(f[0], f[2 * kPilotSetSize]);
             const LightImageVariance light = light_image_variance(f);
             c.variance_light_image = light.mean;
+            double moment_items = 0;
+            c.moment_own = c.moment_outer = 0;
+            for (const GridPass& p : f) {
+                c.moment_own += p.moment_own;
+                c.moment_outer += p.moment_outer;
+                moment_items += p.moment_items;
+            }
+            if (moment_items > 0) {
+                c.moment_own /= 3.0 * moment_items;
+                c.moment_outer /= 3.0 * moment_items;
+            }
             c.variance_transport = t.one.mean() + light.mean;
             c.variance_transport_standard_error = std::hypot(t.one.standard_error(), light.standard_error);
             // N x (variance of N samples' mean) = A + B / N: B is what stratification removes
@@ -593,6 +652,8 @@ StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene
             c.variance_shared_tail = t.one.mean() - own.mean();
             if (c.integrator != Integrator::Lt) c.variance_shared_counted = shared_counted;
             c.variance_pixel = pixel_variance(whole, t.one);
+            if (c.integrator == Integrator::Bdpt && !c.inner_connections && c.light_subpaths == 1.0f)
+                c.variance_missed = missed_without_inner;
             c.seconds_per_pass = seconds[size_t(i)] * full_per_sparse;
             const double n = time_budget > 0 && c.seconds_per_pass > 0 ? std::max(1.0, time_budget / c.seconds_per_pass)
                                                                         : double(std::max(spp, 1));
@@ -613,7 +674,8 @@ StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene
             // 1/N (less the shared tail) counts kRiskStandardErrors standard errors high.
             const double risky_transport =
                 std::max(0.0, (own.mean() - c.variance_transport_stratified) * c.adaptive_variance_left + light.mean) +
-                c.variance_shared_counted + kRiskStandardErrors * std::hypot(own_hedge_error, light.standard_error);
+                c.variance_shared_counted + c.variance_missed +
+                kRiskStandardErrors * std::hypot(own_hedge_error, light.standard_error);
             const double transport_mse = risky_transport / n + c.variance_transport_stratified / (n * n);
             c.predicted_mse = transport_mse + c.variance_pixel / std::pow(n, kPixelVarianceExponent);
             const double seconds = n * c.seconds_per_pass * (1.0 + c.adaptive_extra_share);
@@ -636,8 +698,7 @@ StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene
     std::vector<int> ends, between;
     for (int i = 0; i < int(pilot.candidates.size()); ++i) {
         const StrategyCandidate& c = pilot.candidates[size_t(i)];
-        const bool full_bdpt = c.integrator == Integrator::Bdpt && c.light_subpaths == 1.0f && c.inner_connections;
-        (full_bdpt || c.integrator != Integrator::Bdpt ? ends : between).push_back(i);
+        (is_full_bdpt(c) || c.integrator != Integrator::Bdpt ? ends : between).push_back(i);
     }
     run_passes(ends);
     evaluate(ends);
