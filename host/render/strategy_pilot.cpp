@@ -576,7 +576,7 @@ StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene
     // outer part less full bdpt's own is what the mix adds to full bdpt's variance for the same
     // paths, among them those that only inner connections sample well (a caustic's light on a
     // wall seen through glass: the mix has s = 0 alone for them, whose rare large samples a
-    // sparse grid meets too seldom; on cornell-specular its passes measured 0.86-1.09x full
+    // sparse grid meets too seldom; on cornell-specular its passes measured 1.0-1.2x full
     // bdpt's variance, where its renders have 1.2x the error of half the light subpaths').
     // 0 unless both ran (`which`), and where the mix's own passes saw as much.
     auto missed_without_inner_connections = [&](const std::vector<int>& which, const std::vector<SetVariances>& transport) {

@@ -38,7 +38,11 @@
 // a share of their common part for every camera candidate instead (common_shared_variance), and
 // counts two standard errors high, so that a candidate whose fireflies the grid happened to miss
 // is not chosen for them (the standard error without the grid's largest terms, which are in A
-// already). The light image
+// already). The mix without inner connections samples some paths by s = 0 alone that full bdpt
+// joins by inner connections, rare large samples that its grid meets too seldom: full bdpt's
+// passes of set x also return their squared contributions reweighted by the share of the MIS
+// weights that mix keeps (subset moments, cl/kernels/render.cl), and what they show beyond the
+// mix's own variance counts in its A (variance_missed). The light image
 // (t = 1) takes no part in the grid's terms: its variance is estimated from the squares of all
 // the splats of the sparse passes' light subpaths, wherever they land (light_image_variance),
 // 20-30x more of them than land on the grid, and counted in A.
