@@ -457,15 +457,15 @@ void Renderer::collect(RenderedItems& out, const PassSpec& pass, const LaunchSlo
             out.dropped_items.push_back(offset + i);
         }
     }
-    if (!out.subset_moments.empty())
+    if (!out.subset_moments.empty()) {
         for (int i = 0; i < item_count; ++i) {
             const cl_float2& m = slot.subset_moments_host[size_t(i)];
             out.subset_moments[size_t(offset + i) * 2] = m.s[0];
             out.subset_moments[size_t(offset + i) * 2 + 1] = m.s[1];
         }
-    for (int i : out.dropped_items)  // a dropped sample's moments are not finite either
-        if (!out.subset_moments.empty() && i >= offset)
-            out.subset_moments[size_t(i) * 2] = out.subset_moments[size_t(i) * 2 + 1] = 0.0f;
+        for (int i : out.dropped_items)  // a dropped sample's moments are not finite either
+            if (i >= offset) out.subset_moments[size_t(i) * 2] = out.subset_moments[size_t(i) * 2 + 1] = 0.0f;
+    }
     if (strategy_slots_ > 0) {
         auto dropped = std::lower_bound(out.dropped_items.begin(), out.dropped_items.end(), offset);
         for (int i = 0; i < item_count; ++i) {

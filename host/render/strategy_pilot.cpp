@@ -622,17 +622,6 @@ StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene
             const GroupedVariance whole = one_sample_variance(f[0], f[2 * kPilotSetSize]);
             const LightImageVariance light = light_image_variance(f);
             c.variance_light_image = light.mean;
-            double moment_items = 0;
-            c.moment_own = c.moment_outer = 0;
-            for (const GridPass& p : f) {
-                c.moment_own += p.moment_own;
-                c.moment_outer += p.moment_outer;
-                moment_items += p.moment_items;
-            }
-            if (moment_items > 0) {
-                c.moment_own /= 3.0 * moment_items;
-                c.moment_outer /= 3.0 * moment_items;
-            }
             c.variance_transport = t.one.mean() + light.mean;
             c.variance_transport_standard_error = std::hypot(t.one.standard_error(), light.standard_error);
             // N x (variance of N samples' mean) = A + B / N: B is what stratification removes

@@ -81,9 +81,6 @@ struct StrategyCandidate {
     // part common to all (common_shared_variance); 0 for lt.
     double variance_shared_counted = 0;
     double variance_pixel = 0;
-    // Full bdpt's: per pixel and channel, the mean of one sample's summed squared contributions,
-    // and the same as a mix without inner connections would have it (subset moments, render.cl).
-    double moment_own = 0, moment_outer = 0;
     // Without inner connections: the variance its own passes missed, which full bdpt's subset
     // moments show (run_strategy_pilot), counted in the prediction's 1/N part; 0 for the others.
     double variance_missed = 0;
