@@ -384,6 +384,16 @@ TEST_F(CliTest, AutoChoosesTheStrategyMixByPilot) {
         EXPECT_GE(counted, 0.0);
         EXPECT_LE(counted, c["variance_shared_tail"].get<double>() * (1.0 + 1e-9) + 1e-300) << c.dump();
     }
+    // What full bdpt's subset moments say a candidate's passes missed: only the mix without
+    // inner connections has such a floor.
+    for (const nlohmann::json& c : p["candidates"]) {
+        const double missed = c["variance_missed"].get<double>();
+        if (c["name"].get<std::string>().find("no inner connections") == std::string::npos) {
+            EXPECT_EQ(missed, 0.0) << c.dump();
+        } else {
+            EXPECT_GE(missed, 0.0) << c.dump();
+        }
+    }
     std::string best;
     double best_efficiency = -1;
     for (const nlohmann::json& c : p["candidates"]) {
