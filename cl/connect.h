@@ -64,11 +64,12 @@ inline float3 connect_bdpt(const SceneData* scene, const StrategyMix* mix, Rng* 
 
     if (s == 0) {
         const PathVertex* pt = &camera_path[t - 1];
+        if (!vertex_is_light(pt)) return L;
 #ifdef HAS_CAUSTIC_MERGING
         /* The pass's caustic photons estimate these paths instead (render.cl). */
         if (merged_by_caustic_photons(scene, camera_path, t)) return L;
 #endif
-        if (vertex_is_light(pt)) L = vertex_le(scene, pt, &camera_path[t - 2]) * pt->beta;
+        L = vertex_le(scene, pt, &camera_path[t - 2]) * pt->beta;
     } else if (t == 1) {
         const PathVertex* qs = &light_path[s - 1];
         rng_seek(rng, sample_draw_lens_connection(s));

@@ -496,6 +496,12 @@ bool is_full_bdpt(const StrategyCandidate& c) {
     return c.integrator == Integrator::Bdpt && c.light_subpaths == 1.0f && c.inner_connections;
 }
 
+// Whether `c` is bdpt without inner connections at one light subpath per sample (with or
+// without light roulette).
+bool is_without_inner_connections(const StrategyCandidate& c) {
+    return c.integrator == Integrator::Bdpt && c.light_subpaths == 1.0f && !c.inner_connections;
+}
+
 StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene, const RenderOptions& options,
                                  int spp, double time_budget, bool adaptive, RenderStats* stats) {
     using Clock = std::chrono::steady_clock;
@@ -585,7 +591,7 @@ StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene
             const StrategyCandidate& c = pilot.candidates[size_t(i)];
             if (c.roulette_light_from != options.roulette_light_from) continue;
             if (is_full_bdpt(c)) full = i;
-            if (c.integrator == Integrator::Bdpt && !c.inner_connections && c.light_subpaths == 1.0f) outer = i;
+            if (is_without_inner_connections(c)) outer = i;
         }
         if (full < 0 || outer < 0) return 0.0;
         double own = 0, outer_moment = 0, items = 0;
@@ -641,8 +647,7 @@ StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene
             c.variance_shared_tail = t.one.mean() - own.mean();
             if (c.integrator != Integrator::Lt) c.variance_shared_counted = shared_counted;
             c.variance_pixel = pixel_variance(whole, t.one);
-            if (c.integrator == Integrator::Bdpt && !c.inner_connections && c.light_subpaths == 1.0f)
-                c.variance_missed = missed_without_inner;
+            if (is_without_inner_connections(c)) c.variance_missed = missed_without_inner;
             c.seconds_per_pass = seconds[size_t(i)] * full_per_sparse;
             const double n = time_budget > 0 && c.seconds_per_pass > 0 ? std::max(1.0, time_budget / c.seconds_per_pass)
                                                                         : double(std::max(spp, 1));
