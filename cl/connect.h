@@ -32,8 +32,7 @@ __attribute__((always_inline)) inline float3 connection_visibility(const SceneDa
     *to_b = 1.0f;
     if (is_black(L)) return L;
 #ifdef HAS_MEDIA
-    uint stream = 0x80000000u | ((uint)s << 12) | (uint)t;
-    return L * vertices_transmittance(scene, rng, stream, a, b, to_a, to_b);
+    return L * vertices_transmittance(scene, rng, connection_stream(s, t), a, b, to_a, to_b);
 #else
     return vertices_visible(scene, a, b) ? L : (float3)(0.0f);
 #endif

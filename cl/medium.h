@@ -251,6 +251,10 @@ inline int vertex_medium_toward(const SceneData* scene, const PathVertex* v, flo
     }
 }
 
+/* The random stream of connection (s, t)'s transmittance through grid media: one per strategy,
+ * apart from every segment's stream (those are numbered by their distance draws, below 2^31). */
+inline uint connection_stream(int s, int t) { return 0x80000000u | ((uint)s << 12) | (uint)t; }
+
 /* Transmittance between two vertices, per channel: 0 if any surface but an index-matched
  * boundary lies between them; through grid media an unbiased estimate by ratio tracking
  * (random stream `stream`), W of the top of this file. *to_a and *to_b receive the segment's

@@ -18,7 +18,10 @@
  *     ratio (below);
  *   - the stored subpath, its copies into mis_weight, and the loops over (s, t) pairs that
  *     a path tracer's strategy set rules out.
- * Scenes with media and --strategy-images keep the generic route (render.cl). */
+ * With media (cl/medium.h) a segment may end in a medium vertex, whose phase function takes the
+ * BSDF's place, and a light sample's visibility is the segment's transmittance, whose distance
+ * density toward the light point enters the ratio as random_walk's and mis_weight's do.
+ * --strategy-images keeps the generic route (render.cl). */
 #ifndef CLBDPT_PATH_TRACER_H
 #define CLBDPT_PATH_TRACER_H
 
@@ -61,12 +64,13 @@ inline float3 path_tracer_emitter_hit(const SceneData* scene, const PathVertex* 
     return L * (1.0f / (1.0f + ratio));
 }
 
-/* s = 1 at the path's vertex v: a light point sampled from v on `light` (taken with
+/* s = 1 at the path's t-th vertex v: a light point sampled from v on `light` (taken with
  * probability select_pdf; -1: none) with draw u and joined to it, weighted against s = 0 (the
  * same path found by sampling v's BSDF toward the light point; p_0 / p_1 = its area density
- * over the light's origin density; weight 1 for a delta light). */
-inline float3 path_tracer_light_sample(const SceneData* scene, int light, float select_pdf, float2 u,
-                                       const PathVertex* prev, const PathVertex* v, const Bsdf* b) {
+ * over the light's origin density; weight 1 for a delta light). b: v's BSDF (unused at a
+ * medium vertex). */
+inline float3 path_tracer_light_sample(const SceneData* scene, const Rng* rng, int t, int light, float select_pdf,
+                                       float2 u, const PathVertex* prev, const PathVertex* v, const Bsdf* b) {
     LightSample ls;
     if (light < 0 || !light_sample_li(scene, light, v->p, u, &ls)) return (float3)(0.0f);
     PathVertex sampled = vertex_at(VERTEX_LIGHT, ls.p, ls.n, ls.p_error);
@@ -74,11 +78,30 @@ inline float3 path_tracer_light_sample(const SceneData* scene, int light, float 
     sampled.light = light;
     sampled.pdf_fwd = vertex_pdf_light_origin(scene, &sampled, v);
     float3 wi;
-    float3 L = v->beta * surface_vertex_f(v, b, &sampled, TRANSPORT_RADIANCE, &wi) * sampled.beta;
+#ifdef HAS_MEDIA
+    int in_medium = v->type == VERTEX_MEDIUM;
+    float3 f = in_medium ? vertex_f(scene, v, &sampled, TRANSPORT_RADIANCE)
+                         : surface_vertex_f(v, b, &sampled, TRANSPORT_RADIANCE, &wi);
+#else
+    float3 f = surface_vertex_f(v, b, &sampled, TRANSPORT_RADIANCE, &wi);
+#endif
+    float3 L = v->beta * f * sampled.beta;
     if (vertex_on_surface(v)) L *= fabs(dot(ls.wi, v->ns));
+#ifdef HAS_MEDIA
+    /* connect_bdpt's s = 1 with its stream: transmittance, and the distance densities. */
+    if (is_black(L)) return (float3)(0.0f);
+    float to_v, to_light;
+    L *= vertices_transmittance(scene, rng, connection_stream(1, t), v, &sampled, &to_v, &to_light);
+    if (is_black(L)) return (float3)(0.0f);
+#else
     if (is_black(L) || !vertices_visible(scene, v, &sampled)) return (float3)(0.0f);
+#endif
     if (vertex_is_delta_light(scene, &sampled)) return L;
+#ifdef HAS_MEDIA
+    float pdf_bsdf = (in_medium ? vertex_pdf(scene, v, prev, &sampled) : surface_vertex_pdf(scene, v, b, prev, &sampled, wi)) * to_light;
+#else
     float pdf_bsdf = surface_vertex_pdf(scene, v, b, prev, &sampled, wi);
+#endif
     float ratio = mis_ratio(pdf_bsdf, 0, sampled.pdf_fwd, 0);
 #ifdef NEE_OWN_SELECTION
     ratio /= light_sample_selection_ratio(scene, light, v->p); /* sampled.pdf_fwd has select_pdf */
@@ -89,19 +112,19 @@ inline float3 path_tracer_light_sample(const SceneData* scene, int light, float 
 /* The s = 1 strategy samples at the path's vertex v (draw u: u.x picks the light, its rest and
  * u.y the point): one light sample, or with NEE_EVERY_LIGHT one of each light group
  * (cl/lights.h), each added on its own. */
-inline void path_tracer_light_samples(const SceneData* scene, float2 u, const PathVertex* prev, const PathVertex* v,
-                                      const Bsdf* b, int t, PathTracerSum* sum) {
+inline void path_tracer_light_samples(const SceneData* scene, const Rng* rng, float2 u, const PathVertex* prev,
+                                      const PathVertex* v, const Bsdf* b, int t, PathTracerSum* sum) {
     if (!vertex_is_connectible(scene, v) || scene->info->light_count == 0) return;
     float select_pdf, u_rest;
 #ifdef NEE_EVERY_LIGHT
     int groups = nee_group_count(scene);
     for (int g = 0; g < groups; ++g) {
         int light = nee_group_light(scene, g, v->p, u.x, &select_pdf, &u_rest);
-        path_tracer_add(sum, path_tracer_light_sample(scene, light, select_pdf, (float2)(u_rest, u.y), prev, v, b), 1, t);
+        path_tracer_add(sum, path_tracer_light_sample(scene, rng, t, light, select_pdf, (float2)(u_rest, u.y), prev, v, b), 1, t);
     }
 #else
     int light = sample_light_for_point(scene, v->p, u.x, &select_pdf, &u_rest);
-    path_tracer_add(sum, path_tracer_light_sample(scene, light, select_pdf, (float2)(u_rest, u.y), prev, v, b), 1, t);
+    path_tracer_add(sum, path_tracer_light_sample(scene, rng, t, light, select_pdf, (float2)(u_rest, u.y), prev, v, b), 1, t);
 #endif
 }
 
@@ -118,15 +141,34 @@ inline void path_tracer_sample(const SceneData* scene, Rng* rng, float2 raster, 
      * vertex's forward density all read it (from prev_bsdf at the next vertex). */
     Bsdf prev_bsdf;
     float3 beta = prev.beta;
+#ifdef HAS_MEDIA
+    int medium = vertex_medium_toward(scene, &prev, d);
+#endif
     /* Vertex i of the camera subpath (the camera is vertex 0), so its strategies have t = i + 1
      * camera vertices; the last, i = MAX_DEPTH + 1, can only be an emitter hit (s = 0). */
     for (int i = 1; i <= MAX_DEPTH + 1 && !is_black(beta); ++i) {
         PathVertex v;
         Hit hit;
+#ifdef HAS_MEDIA
+        /* random_walk's segment through media, from the same distance draw and stream. */
+        uint distance_draw = sample_draw_camera_bounce(i - 1) + SAMPLE_DRAW_BOUNCE_DISTANCE;
+        rng_seek(rng, distance_draw);
+        SegmentTally tally;
+        int segment = trace_through_media(scene, rng, distance_draw, &o, d, &medium, rng_next2(rng), &hit, &tally);
+        if (segment == SEGMENT_MEDIUM) {
+            v = vertex_at(VERTEX_MEDIUM, o, (float3)(0.0f), 0.0f);
+            v.wo = -d;
+            v.medium = medium;
+            v.density = tally.density;
+        } else if (segment == SEGMENT_SURFACE) {
+            surface_vertex_from_hit(scene, &prev, &hit, &v);
+        } else {
+#else
         ++*scene->rays_traced;
         if (intersect(scene->nodes, scene->triangles, &scene->cutouts, o, d, INFINITY, &hit)) {
             surface_vertex_from_hit(scene, &prev, &hit, &v);
         } else {
+#endif
 #ifdef HAS_ENVIRONMENT
             /* An escaped ray ends on the environment light (seed ch. 6; as random_walk). */
             if (scene->info->environment_light < 0) break;
@@ -137,10 +179,28 @@ inline void path_tracer_sample(const SceneData* scene, Rng* rng, float2 raster, 
             break;
 #endif
         }
+#ifdef HAS_MEDIA
+        v.dist_fwd = segment_distance_density(scene, tally.weight, &v);
+        if (v.dist_fwd == 0.0f) break;
+        float3 gain = tally.weight / v.dist_fwd;
+        if (segment == SEGMENT_MEDIUM) gain *= xyz(scene->media[medium - 1].sigma_s) * v.density;
+        beta *= gain;
+#endif
         v.beta = beta;
         /* The forward density from the positions, as random_walk (cl/walk.h says why). */
-        if (i > 1 && !prev.delta) pdf_fwd = bsdf_pdf(&prev_bsdf, prev.wo, direction_from(&prev, &v));
+        if (i > 1 && !prev.delta) {
+            float3 w = direction_from(&prev, &v);
+#ifdef HAS_MEDIA
+            pdf_fwd = prev.type == VERTEX_MEDIUM ? phase_hg(prev.wo, w, vertex_phase_g(scene, &prev))
+                                                 : bsdf_pdf(&prev_bsdf, prev.wo, w);
+#else
+            pdf_fwd = bsdf_pdf(&prev_bsdf, prev.wo, w);
+#endif
+        }
         v.pdf_fwd = convert_density(scene, &prev, pdf_fwd, &v);
+#ifdef HAS_MEDIA
+        v.pdf_fwd *= v.dist_fwd;
+#endif
 
         int t = i + 1;
         if (vertex_is_light(&v)) path_tracer_add(sum, path_tracer_emitter_hit(scene, &prev, &v, t), 0, t);
@@ -151,8 +211,23 @@ inline void path_tracer_sample(const SceneData* scene, Rng* rng, float2 raster, 
         uint light_draw = sample_draw_light_connection(t), bounce_draw = sample_draw_camera_bounce(i - 1);
         float4 ux, uy;
         rng_draws4(rng, (uint4)(light_draw, bounce_draw, bounce_draw + 1u, bounce_draw + 1u), &ux, &uy);
+#ifdef HAS_MEDIA
+        if (v.type == VERTEX_MEDIUM) {
+            /* The phase function samples itself (random_walk's medium vertex). */
+            path_tracer_light_samples(scene, rng, (float2)(ux.s0, uy.s0), &prev, &v, 0, t, sum);
+            float g = vertex_phase_g(scene, &v);
+            float3 wi;
+            pdf_fwd = sample_phase_hg(v.wo, g, (float2)(ux.s2, uy.s2), &wi);
+            beta *= phase_hg(v.wo, wi, g) / pdf_fwd;
+            if (!russian_roulette_continues(i - 1, scene->roulette_camera_from, 1.0f, uy.s1, &beta)) break;
+            o = v.p;
+            d = wi;
+            prev = v;
+            continue;
+        }
+#endif
         Bsdf b = vertex_bsdf(scene, &v);
-        path_tracer_light_samples(scene, (float2)(ux.s0, uy.s0), &prev, &v, &b, t, sum);
+        path_tracer_light_samples(scene, rng, (float2)(ux.s0, uy.s0), &prev, &v, &b, t, sum);
 
         BsdfSample bs;
         if (!bsdf_sample(&b, v.wo, (float3)(ux.s1, ux.s2, uy.s2), TRANSPORT_RADIANCE, &bs) || is_black(bs.f)) break;
@@ -166,6 +241,9 @@ inline void path_tracer_sample(const SceneData* scene, Rng* rng, float2 raster, 
         }
         o = offset_ray_origin(v.p, v.ng, v.p_error, bs.wi);
         d = bs.wi;
+#ifdef HAS_MEDIA
+        medium = medium_beyond(scene, v.material, v.ng, d);
+#endif
         prev = v;
         prev_bsdf = b;
     }

@@ -1,7 +1,8 @@
 // The path tracer made one vertex at a time (cl/path_tracer.h) gives the image
 // of the path tracer made as bdpt makes its strategies, from a stored camera
-// subpath (cl/connect.h, cl/mis.h): bit for bit, on every bundled scene without
-// media and on every light kind, from max depth 0 (emitters seen directly) up.
+// subpath (cl/connect.h, cl/mis.h): bit for bit, on every bundled scene (media
+// and grids included), on media behind index-matched boundaries and inside glass,
+// and on every light kind, from max depth 0 (emitters seen directly) up.
 // The generic route's weights are checked against a brute force elsewhere
 // (mis_brute_force_test.cpp) and its images against bdpt and lt
 // (scene_agreement_test.cpp), so this equality carries those checks over.
@@ -30,10 +31,12 @@ TEST_P(PathTracerRoutesOnScene, SameImageAsFromStoredSubpaths) {
 
 // Glass and mirrors (cornell-specular), glossy plates and lights of four sizes
 // (veach-mis), point and spot lights (point-spot), an environment map (sky),
-// light arriving indirectly (lamp-ceiling).
+// light arriving indirectly (lamp-ceiling), fog filling a room around the camera
+// (cornell-fog; fog-spot with a point and a spot light in it) and a density grid
+// behind an index-matched box (smoke).
 INSTANTIATE_TEST_SUITE_P(BundledScenes, PathTracerRoutesOnScene,
                          ::testing::Values("cornell-box", "cornell-specular", "lamp-ceiling", "veach-mis", "point-spot",
-                                           "sky"),
+                                           "sky", "cornell-fog", "fog-spot", "smoke"),
                          [](const ::testing::TestParamInfo<const char*>& info) {
                              std::string name = info.param;
                              for (char& c : name)
@@ -70,6 +73,38 @@ TEST(PathTracerRoutes, SameImageThroughDeltaVerticesAndShadingNormals) {
     room_camera(b);
     const DeviceScene scene = build_device_scene(b.scene, kFilm, kFilm);
     expect_pt_routes_agree(scene, 8, kPasses, "mirror, glass and a smooth sphere");
+}
+
+// Media the camera enters and leaves: a scattering ball behind an index-matched
+// boundary (segments that cross boundaries without a vertex), a glass sphere
+// with an absorbing, scattering interior (transmittance through glass's medium)
+// and a spot light in a vacuum bubble inside fog that fills the room.
+TEST(PathTracerRoutes, SameImageThroughMediaBehindBoundariesAndGlass) {
+    SceneBuilder b;
+    lit_room(b, /*with_block=*/false);
+    const int cloud = add_medium(b.scene, "cloud", {0.5f, 1.0f, 1.5f}, {7.0f, 7.0f, 6.0f}, 0.5f);
+    b.sphere({-0.5f, 0.5f, 0.3f}, 0.35f, 3, /*inward=*/false, b.material(interface_material(cloud), "cloud boundary"));
+    const int tint = add_medium(b.scene, "tint", {0.5f, 2.0f, 3.0f}, {0.5f, 0.5f, 0.5f}, 0.0f);
+    Material glass = glass_material(1.5f);
+    glass.interior_medium = tint;
+    b.sphere({0.45f, 0.4f, 0.2f}, 0.3f, 3, /*inward=*/false, b.material(glass, "tinted glass"));
+    const DeviceScene scene = build_device_scene(b.scene, kFilm, kFilm);
+    EXPECT_TRUE(scene.warnings.empty()) << scene.warnings.front();
+    expect_pt_routes_agree(scene, 8, kPasses, "cloud ball and tinted glass");
+
+    SceneBuilder f;
+    RoomMaterials m = room_materials(f);
+    room_walls(f, m, /*with_block=*/true);
+    room_camera(f);
+    ceiling_light(f, {0, 1.999f, 0.3f}, 0.3f, m.light);
+    LightDesc spot = spot_light({0.3f, 1.8f, 0.3f}, {0.0f, 0.0f, 0.2f}, {3, 3, 3}, 20, 5);
+    f.scene.lights.push_back(spot);
+    const int fog = add_medium(f.scene, "fog", {0.1f, 0.1f, 0.1f}, {0.4f, 0.4f, 0.4f}, 0.2f);
+    fill_with(f.scene, fog);
+    f.sphere(spot.position, 0.1f, 2, /*inward=*/false, f.material(interface_material(0, fog), "bubble"));
+    const DeviceScene fogged = build_device_scene(f.scene, kFilm, kFilm);
+    ASSERT_EQ(fogged.info.camera_medium, fog);
+    expect_pt_routes_agree(fogged, 5, kPasses, "spot in a bubble in fog");
 }
 
 }  // namespace

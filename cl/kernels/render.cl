@@ -22,10 +22,9 @@
 #endif
 
 /* The path tracer makes its connections as its one subpath grows (cl/path_tracer.h), except
- * where it would need more than two vertices at hand: media (a connection's transmittance and
- * distance densities), per-strategy images, and PT_FROM_SUBPATHS (tests and benchmarks: the
- * generic route below, to compare with). */
-#if INTEGRATOR == INTEGRATOR_PT && !defined(HAS_MEDIA) && !defined(STRATEGY_IMAGES) && !defined(PT_FROM_SUBPATHS)
+ * for per-strategy images and PT_FROM_SUBPATHS (tests and benchmarks: the generic route below,
+ * to compare with). */
+#if INTEGRATOR == INTEGRATOR_PT && !defined(STRATEGY_IMAGES) && !defined(PT_FROM_SUBPATHS)
 #define PT_ONE_VERTEX_AT_A_TIME 1
 #include "path_tracer.h"
 #else
