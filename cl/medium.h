@@ -231,8 +231,12 @@ inline int trace_through_media(const SceneData* scene, const Rng* rng, uint stre
             }
         }
         if (!found) return SEGMENT_LOST;
+#ifdef HAS_MEDIUM_INTERFACES
         if (scene->materials[scene->infos[hit->triangle].material].kind != MATERIAL_INTERFACE) return SEGMENT_SURFACE;
         cross_interface(scene, hit, d, o, medium);
+#else
+        return SEGMENT_SURFACE;
+#endif
     }
     return SEGMENT_LOST;
 }
@@ -272,7 +276,14 @@ inline float3 vertices_transmittance(const SceneData* scene, const Rng* rng, uin
         if (d.x == 0.0f && d.y == 0.0f && d.z == 0.0f) return (float3)(0.0f);
         Hit hit;
         ++*scene->rays_traced;
+#ifdef HAS_MEDIUM_INTERFACES
         int found = intersect_segment(scene->nodes, scene->triangles, &scene->cutouts, o, d, &hit);
+#else
+        /* No index-matched boundary to cross: whatever surface lies between blocks the segment,
+         * and an any-hit query finds one sooner than the closest hit (the same triangle test). */
+        if (occluded(scene->nodes, scene->triangles, &scene->cutouts, o, d, 1.0f)) return (float3)(0.0f);
+        const int found = 0;
+#endif
         float length_d = length(d);
         float t_max = (found ? hit.t : 1.0f) * length_d;
         if (medium != MEDIUM_VACUUM) {

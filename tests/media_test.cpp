@@ -303,6 +303,41 @@ TEST(Media, CompiledOnlyWhereUsed) {
     lit_room(b);
     b.box({0.2f, 0.2f, 0.2f}, {0.4f, 0.4f, 0.4f}, false, b.material(interface_material(0), "nothing"));
     EXPECT_TRUE(kernel_has_define(b.scene, "HAS_MEDIA"));
+    EXPECT_TRUE(kernel_has_define(b.scene, "HAS_MEDIUM_INTERFACES"));
+}
+
+// Without index-matched boundaries a connection through fog asks whether anything lies between
+// its ends (any hit) instead of finding the closest surface to cross (cl/medium.h). The same
+// fog-filled room with an interface material that no triangle uses is built with the closest-hit
+// route: both must give the same film bit for bit, and trace the same rays.
+TEST(Media, ConnectionsWithoutBoundariesAnswerByAnyHit) {
+    SceneBuilder b;
+    lit_room(b);
+    fill_with(b.scene, add_medium(b.scene, "fog", {0.05f, 0.05f, 0.1f}, {0.3f, 0.4f, 0.4f}, 0.4f));
+    Scene with_boundary = b.scene;
+    with_boundary.materials.push_back(interface_material(0));
+    with_boundary.material_names.push_back("unused boundary");
+    ASSERT_FALSE(kernel_has_define(b.scene, "HAS_MEDIUM_INTERFACES"));
+    ASSERT_TRUE(kernel_has_define(with_boundary, "HAS_MEDIUM_INTERFACES"));
+    for (Integrator integrator : {Integrator::Bdpt, Integrator::Pt}) {
+        const RenderOptions options = make_options(integrator, 5, 371, SamplerKind::Sobol);
+        Film film[2] = {Film(kFilm, kFilm), Film(kFilm, kFilm)};
+        uint64_t rays[2] = {0, 0};
+        const Scene* scenes[2] = {&b.scene, &with_boundary};
+        for (int k = 0; k < 2; ++k) {
+            const DeviceScene scene = build_device_scene(*scenes[k], kFilm, kFilm);
+            Renderer renderer(test_device(), scene, options);
+            renderer.render_passes(film[k], 0, 4);
+            rays[k] = renderer.stats().rays;
+        }
+        const char* name = integrator_name(integrator);
+        EXPECT_EQ(film[0].camera_sum, film[1].camera_sum) << name;
+        EXPECT_EQ(film[0].light_sum, film[1].light_sum) << name;
+        EXPECT_EQ(rays[0], rays[1]) << name;
+        double total = 0;
+        for (double v : film[0].camera_sum) total += v;
+        EXPECT_GT(total, 0.0) << name;
+    }
 }
 
 }  // namespace

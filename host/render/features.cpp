@@ -118,14 +118,15 @@ std::vector<std::string> kernel_defines(const DeviceScene& scene, Integrator int
         directional |= l.kind == LIGHT_DIRECTIONAL;
         environment |= l.kind == LIGHT_ENVIRONMENT;
     }
-    bool glossy = false, mirror = false, glass = false;
+    bool glossy = false, mirror = false, glass = false, interfaces = false;
     bool media = !scene.media.empty();
     for (const Material& m : scene.materials) {
         glossy |= m.kind == MATERIAL_GLOSSY;
         mirror |= m.kind == MATERIAL_MIRROR;
         glass |= m.kind == MATERIAL_GLASS;
-        media |= m.kind == MATERIAL_INTERFACE;
+        interfaces |= m.kind == MATERIAL_INTERFACE;
     }
+    media |= interfaces;
     bool textures = !scene.textures.empty();
     bool cutouts = false, bump_maps = false, emission_textures = false;
     for (const Material& m : scene.materials) {
@@ -183,6 +184,9 @@ std::vector<std::string> kernel_defines(const DeviceScene& scene, Integrator int
     bool grids = false;
     for (const Medium& m : scene.media) grids |= m.grid_offset >= 0;
     if (grids) d.push_back("HAS_MEDIUM_GRIDS");
+    // Without index-matched boundaries, any surface between a connection's ends blocks it: an
+    // any-hit query answers that, where a boundary needs the closest hit to be crossed.
+    if (interfaces) d.push_back("HAS_MEDIUM_INTERFACES");
     return d;
 }
 
