@@ -98,7 +98,9 @@ inline float3 path_tracer_light_sample(const SceneData* scene, const Rng* rng, i
 #endif
     if (vertex_is_delta_light(scene, &sampled)) return L;
 #ifdef HAS_MEDIA
-    float pdf_bsdf = (in_medium ? vertex_pdf(scene, v, prev, &sampled) : surface_vertex_pdf(scene, v, b, prev, &sampled, wi)) * to_light;
+    float pdf_bsdf = in_medium ? vertex_pdf(scene, v, prev, &sampled)
+                               : surface_vertex_pdf(scene, v, b, prev, &sampled, wi);
+    pdf_bsdf *= to_light;
 #else
     float pdf_bsdf = surface_vertex_pdf(scene, v, b, prev, &sampled, wi);
 #endif
@@ -120,11 +122,13 @@ inline void path_tracer_light_samples(const SceneData* scene, const Rng* rng, fl
     int groups = nee_group_count(scene);
     for (int g = 0; g < groups; ++g) {
         int light = nee_group_light(scene, g, v->p, u.x, &select_pdf, &u_rest);
-        path_tracer_add(sum, path_tracer_light_sample(scene, rng, t, light, select_pdf, (float2)(u_rest, u.y), prev, v, b), 1, t);
+        float3 c = path_tracer_light_sample(scene, rng, t, light, select_pdf, (float2)(u_rest, u.y), prev, v, b);
+        path_tracer_add(sum, c, 1, t);
     }
 #else
     int light = sample_light_for_point(scene, v->p, u.x, &select_pdf, &u_rest);
-    path_tracer_add(sum, path_tracer_light_sample(scene, rng, t, light, select_pdf, (float2)(u_rest, u.y), prev, v, b), 1, t);
+    float3 c = path_tracer_light_sample(scene, rng, t, light, select_pdf, (float2)(u_rest, u.y), prev, v, b);
+    path_tracer_add(sum, c, 1, t);
 #endif
 }
 
