@@ -152,22 +152,13 @@ inline void path_tracer_sample(const SceneData* scene, Rng* rng, float2 raster, 
      * camera vertices; the last, i = MAX_DEPTH + 1, can only be an emitter hit (s = 0). */
     for (int i = 1; i <= MAX_DEPTH + 1 && !is_black(beta); ++i) {
         PathVertex v;
-        Hit hit;
 #ifdef HAS_MEDIA
-        /* random_walk's segment through media, from the same distance draw and stream. */
-        uint distance_draw = sample_draw_camera_bounce(i - 1) + SAMPLE_DRAW_BOUNCE_DISTANCE;
-        rng_seek(rng, distance_draw);
+        /* random_walk's segment through media, from the same distance draw. */
         SegmentTally tally;
-        int segment = trace_through_media(scene, rng, distance_draw, &o, d, &medium, rng_next2(rng), &hit, &tally);
-        if (segment == SEGMENT_MEDIUM) {
-            v = vertex_at(VERTEX_MEDIUM, o, (float3)(0.0f), 0.0f);
-            v.wo = -d;
-            v.medium = medium;
-            v.density = tally.density;
-        } else if (segment == SEGMENT_SURFACE) {
-            surface_vertex_from_hit(scene, &prev, &hit, &v);
-        } else {
+        uint distance_draw = sample_draw_camera_bounce(i - 1) + SAMPLE_DRAW_BOUNCE_DISTANCE;
+        if (walk_segment(scene, rng, distance_draw, &prev, &o, d, &medium, &v, &tally) == SEGMENT_LOST) {
 #else
+        Hit hit;
         ++*scene->rays_traced;
         if (intersect(scene->nodes, scene->triangles, &scene->cutouts, o, d, INFINITY, &hit)) {
             surface_vertex_from_hit(scene, &prev, &hit, &v);
@@ -184,18 +175,14 @@ inline void path_tracer_sample(const SceneData* scene, Rng* rng, float2 raster, 
 #endif
         }
 #ifdef HAS_MEDIA
-        v.dist_fwd = segment_distance_density(scene, tally.weight, &v);
-        if (v.dist_fwd == 0.0f) break;
-        float3 gain = tally.weight / v.dist_fwd;
-        if (segment == SEGMENT_MEDIUM) gain *= xyz(scene->media[medium - 1].sigma_s) * v.density;
-        beta *= gain;
+        if (!walk_segment_throughput(scene, &tally, &v, &beta)) break;
 #endif
         v.beta = beta;
         /* The forward density from the positions, as random_walk (cl/walk.h says why). */
         if (i > 1 && !prev.delta) {
             float3 w = direction_from(&prev, &v);
 #ifdef HAS_MEDIA
-            pdf_fwd = prev.type == VERTEX_MEDIUM ? phase_hg(prev.wo, w, vertex_phase_g(scene, &prev))
+            pdf_fwd = prev.type == VERTEX_MEDIUM ? vertex_scatter_pdf(scene, &prev, prev.wo, w)
                                                  : bsdf_pdf(&prev_bsdf, prev.wo, w);
 #else
             pdf_fwd = bsdf_pdf(&prev_bsdf, prev.wo, w);
@@ -217,12 +204,9 @@ inline void path_tracer_sample(const SceneData* scene, Rng* rng, float2 raster, 
         rng_draws4(rng, (uint4)(light_draw, bounce_draw, bounce_draw + 1u, bounce_draw + 1u), &ux, &uy);
 #ifdef HAS_MEDIA
         if (v.type == VERTEX_MEDIUM) {
-            /* The phase function samples itself (random_walk's medium vertex). */
             path_tracer_light_samples(scene, rng, (float2)(ux.s0, uy.s0), &prev, &v, 0, t, sum);
-            float g = vertex_phase_g(scene, &v);
             float3 wi;
-            pdf_fwd = sample_phase_hg(v.wo, g, (float2)(ux.s2, uy.s2), &wi);
-            beta *= phase_hg(v.wo, wi, g) / pdf_fwd;
+            pdf_fwd = walk_scatter_in_medium(scene, &v, (float2)(ux.s2, uy.s2), &wi, &beta);
             if (!russian_roulette_continues(i - 1, scene->roulette_camera_from, 1.0f, uy.s1, &beta)) break;
             o = v.p;
             d = wi;

@@ -59,6 +59,50 @@ inline float3 direction_from(const PathVertex* prev, const PathVertex* v) {
     return v->type == VERTEX_SURFACE ? -v->wo : normalize(v->p - prev->p);
 }
 
+#ifdef HAS_MEDIA
+/* One segment of a walk from vertex prev along the unit direction d (cl/medium.h): followed
+ * from *o in *medium, with the segment's distance draw (whose number also names its random
+ * stream), to the medium or surface vertex where it ends (*v; left as it is if the segment is
+ * lost), gathering *tally. Returns the SEGMENT_ kind. */
+inline int walk_segment(const SceneData* scene, Rng* rng, uint distance_draw, const PathVertex* prev, float3* o,
+                        float3 d, int* medium, PathVertex* v, SegmentTally* tally) {
+    rng_seek(rng, distance_draw);
+    Hit hit;
+    int segment = trace_through_media(scene, rng, distance_draw, o, d, medium, rng_next2(rng), &hit, tally);
+    if (segment == SEGMENT_MEDIUM) {
+        *v = vertex_at(VERTEX_MEDIUM, *o, (float3)(0.0f), 0.0f);
+        v->wo = -d;
+        v->medium = *medium;
+        v->density = tally->density;
+    } else if (segment == SEGMENT_SURFACE) {
+        surface_vertex_from_hit(scene, prev, &hit, v);
+    }
+    return segment;
+}
+
+/* The segment's distance sampling, weighted by its own density (cl/medium.h): v->dist_fwd, and
+ * *beta times the segment's weight over it (and sigma_s where v is a medium vertex). Returns 0,
+ * and leaves *beta, where the density is 0: the walk ends there. */
+inline int walk_segment_throughput(const SceneData* scene, const SegmentTally* tally, PathVertex* v, float3* beta) {
+    v->dist_fwd = segment_distance_density(scene, tally->weight, v);
+    if (v->dist_fwd == 0.0f) return 0;
+    float3 gain = tally->weight / v->dist_fwd;
+    if (v->type == VERTEX_MEDIUM) gain *= xyz(scene->media[v->medium - 1].sigma_s) * v->density;
+    *beta *= gain;
+    return 1;
+}
+
+/* Scattering at medium vertex v with draw u: the phase function samples itself (up to the
+ * isotropic shortcut of sample_phase_hg); *wi gets the direction, *beta the phase value over its
+ * density, which is returned. No delta, no shading normals; the medium stays. */
+inline float walk_scatter_in_medium(const SceneData* scene, const PathVertex* v, float2 u, float3* wi, float3* beta) {
+    float g = vertex_phase_g(scene, v);
+    float pdf = sample_phase_hg(v->wo, g, u, wi);
+    *beta *= phase_hg(v->wo, *wi, g) / pdf;
+    return pdf;
+}
+#endif
+
 /* Extends a subpath: path[start - 1] is the vertex the ray (o, d) leaves (the camera or the
  * light vertex), with throughput beta and solid-angle density pdf_dir of d. Writes at most
  * max_vertices vertices from path[start] on and returns how many; stops before tracing a ray
@@ -89,25 +133,14 @@ inline int random_walk(const SceneData* scene, Rng* rng, float3 o, float3 d, flo
      * 2 and 3 for the odd one after it (rng_draws4). */
     float4 bounce_x, bounce_y;
     while (i < end && !is_black(beta)) {
-        Hit hit;
         PathVertex* vertex = &path[i];
         PathVertex* prev = &path[i - 1];
 #ifdef HAS_MEDIA
         uint distance_draw = first_draw + SAMPLE_DRAWS_PER_BOUNCE * (uint)(i - start) + SAMPLE_DRAW_BOUNCE_DISTANCE;
-        rng_seek(rng, distance_draw);
         SegmentTally tally;
-        /* The draw's number is unique to this segment: it names its random stream too. */
-        int segment = trace_through_media(scene, rng, distance_draw, &o, d, &medium, rng_next2(rng), &hit, &tally);
-        int found = segment != SEGMENT_LOST;
-        if (segment == SEGMENT_MEDIUM) {
-            *vertex = vertex_at(VERTEX_MEDIUM, o, (float3)(0.0f), 0.0f);
-            vertex->wo = -d;
-            vertex->medium = medium;
-            vertex->density = tally.density;
-        } else if (found) {
-            surface_vertex_from_hit(scene, prev, &hit, vertex);
-        }
+        int found = walk_segment(scene, rng, distance_draw, prev, &o, d, &medium, vertex, &tally) != SEGMENT_LOST;
 #else
+        Hit hit;
         int found = intersect(scene->nodes, scene->triangles, &scene->cutouts, o, d, INFINITY, &hit);
         ++*scene->rays_traced;
         if (found) surface_vertex_from_hit(scene, prev, &hit, vertex);
@@ -125,13 +158,8 @@ inline int random_walk(const SceneData* scene, Rng* rng, float3 o, float3 d, flo
 #endif
         }
 #ifdef HAS_MEDIA
-        /* The segment's distance sampling, weighted by its own density (cl/medium.h). */
-        vertex->dist_fwd = segment_distance_density(scene, tally.weight, vertex);
         vertex->dist_rev = segment_distance_density(scene, tally.weight, prev);
-        if (vertex->dist_fwd == 0.0f) break;
-        float3 gain = tally.weight / vertex->dist_fwd;
-        if (segment == SEGMENT_MEDIUM) gain *= xyz(scene->media[medium - 1].sigma_s) * vertex->density;
-        beta *= gain;
+        if (!walk_segment_throughput(scene, &tally, vertex, &beta)) break;
 #endif
         vertex->beta = beta;
         /* A scattering predecessor: its forward density toward this vertex and its own
@@ -172,12 +200,8 @@ inline int random_walk(const SceneData* scene, Rng* rng, float3 o, float3 d, flo
         float u_roulette = (bounce & 1) ? bounce_y.s2 : bounce_y.s0; /* the lobe draw's second value */
 #ifdef HAS_MEDIA
         if (vertex->type == VERTEX_MEDIUM) {
-            /* The phase function is its own density, up to the isotropic shortcut of
-             * sample_phase_hg; no delta, no shading normals, the medium stays. */
-            float g = vertex_phase_g(scene, vertex);
             float3 wi;
-            pdf_fwd = sample_phase_hg(vertex->wo, g, u_dir, &wi);
-            beta *= phase_hg(vertex->wo, wi, g) / pdf_fwd;
+            pdf_fwd = walk_scatter_in_medium(scene, vertex, u_dir, &wi, &beta);
             if (!russian_roulette_continues(bounce, roulette_from, beta_start_max, u_roulette, &beta)) break;
             o = vertex->p;
             d = wi;
