@@ -28,6 +28,17 @@
 #include "mis.h"
 #include "walk.h"
 
+/* Whether the scene's lights are all delta lights (point, spot, directional): then no ray can
+ * hit an emitter, so s = 0 never adds anything, and s = 1 is the only strategy for every path
+ * (its weight is 1). The walk then needs no densities at all: not the forward density of each
+ * vertex (one BSDF density evaluation per bounce, for s = 0's weight), nor the light's origin
+ * density (for s = 1's). The images are the same bit for bit; only unused values go. */
+#if !defined(HAS_AREA_LIGHTS) && !defined(HAS_ENVIRONMENT)
+#define PT_DELTA_LIGHTS_ONLY 1
+#else
+#define PT_DELTA_LIGHTS_ONLY 0
+#endif
+
 /* A sample's weighted sum, and the first strategy that gave a value that is not finite
  * (s * STRATEGY_STRIDE + t; -1: none). */
 typedef struct {
@@ -76,7 +87,6 @@ inline float3 path_tracer_light_sample(const SceneData* scene, const Rng* rng, i
     PathVertex sampled = vertex_at(VERTEX_LIGHT, ls.p, ls.n, ls.p_error);
     sampled.beta = ls.li / (ls.pdf_w * select_pdf);
     sampled.light = light;
-    sampled.pdf_fwd = vertex_pdf_light_origin(scene, &sampled, v);
     float3 wi;
 #ifdef HAS_MEDIA
     int in_medium = v->type == VERTEX_MEDIUM;
@@ -96,7 +106,11 @@ inline float3 path_tracer_light_sample(const SceneData* scene, const Rng* rng, i
 #else
     if (is_black(L) || !vertices_visible(scene, v, &sampled)) return (float3)(0.0f);
 #endif
+#if PT_DELTA_LIGHTS_ONLY
+    return L;
+#else
     if (vertex_is_delta_light(scene, &sampled)) return L;
+    sampled.pdf_fwd = vertex_pdf_light_origin(scene, &sampled, v);
 #ifdef HAS_MEDIA
     float pdf_bsdf = in_medium ? vertex_pdf(scene, v, prev, &sampled)
                                : surface_vertex_pdf(scene, v, b, prev, &sampled, wi);
@@ -109,6 +123,7 @@ inline float3 path_tracer_light_sample(const SceneData* scene, const Rng* rng, i
     ratio /= light_sample_selection_ratio(scene, light, v->p); /* sampled.pdf_fwd has select_pdf */
 #endif
     return L * (1.0f / (1.0f + ratio));
+#endif
 }
 
 /* The s = 1 strategy samples at the path's vertex v (draw u: u.x picks the light, its rest and
@@ -178,6 +193,8 @@ inline void path_tracer_sample(const SceneData* scene, Rng* rng, float2 raster, 
         if (!walk_segment_throughput(scene, &tally, &v, &beta)) break;
 #endif
         v.beta = beta;
+        int t = i + 1;
+#if !PT_DELTA_LIGHTS_ONLY
         /* The forward density from the positions, as random_walk (cl/walk.h says why). */
         if (i > 1 && !prev.delta) {
             float3 w = direction_from(&prev, &v);
@@ -192,9 +209,8 @@ inline void path_tracer_sample(const SceneData* scene, Rng* rng, float2 raster, 
 #ifdef HAS_MEDIA
         v.pdf_fwd *= v.dist_fwd;
 #endif
-
-        int t = i + 1;
         if (vertex_is_light(&v)) path_tracer_add(sum, path_tracer_emitter_hit(scene, &prev, &v, t), 0, t);
+#endif
         if (v.type == VERTEX_LIGHT || i == MAX_DEPTH + 1) break;
         /* The vertex's draws (cl/sample_dimensions.h), all at once: the light sample's (light
          * and point) for s = 1 and the bounce's (lobe and Russian roulette, direction); the
