@@ -162,6 +162,10 @@ inline void path_tracer_sample(const SceneData* scene, Rng* rng, float2 raster, 
     float3 beta = prev.beta;
 #ifdef HAS_MEDIA
     int medium = vertex_medium_toward(scene, &prev, d);
+    /* The next segment's distance draw: the camera ray's here, the others' with each vertex's
+     * draws (below). */
+    rng_seek(rng, sample_draw_camera_bounce(0) + SAMPLE_DRAW_BOUNCE_DISTANCE);
+    float2 u_distance = rng_next2(rng);
 #endif
     /* Vertex i of the camera subpath (the camera is vertex 0), so its strategies have t = i + 1
      * camera vertices; the last, i = MAX_DEPTH + 1, can only be an emitter hit (s = 0). */
@@ -171,7 +175,7 @@ inline void path_tracer_sample(const SceneData* scene, Rng* rng, float2 raster, 
         /* random_walk's segment through media, from the same distance draw. */
         SegmentTally tally;
         uint distance_draw = sample_draw_camera_bounce(i - 1) + SAMPLE_DRAW_BOUNCE_DISTANCE;
-        if (walk_segment(scene, rng, distance_draw, &prev, &o, d, &medium, &v, &tally) == SEGMENT_LOST) {
+        if (walk_segment(scene, rng, distance_draw, u_distance, &prev, &o, d, &medium, &v, &tally) == SEGMENT_LOST) {
 #else
         Hit hit;
         ++*scene->rays_traced;
@@ -214,11 +218,17 @@ inline void path_tracer_sample(const SceneData* scene, Rng* rng, float2 raster, 
         if (v.type == VERTEX_LIGHT || i == MAX_DEPTH + 1) break;
         /* The vertex's draws (cl/sample_dimensions.h), all at once: the light sample's (light
          * and point) for s = 1 and the bounce's (lobe and Russian roulette, direction); the
-         * fourth lane repeats one. */
+         * fourth lane is the next segment's distance draw with media, else it repeats one. */
         uint light_draw = sample_draw_light_connection(t), bounce_draw = sample_draw_camera_bounce(i - 1);
-        float4 ux, uy;
-        rng_draws4(rng, (uint4)(light_draw, bounce_draw, bounce_draw + 1u, bounce_draw + 1u), &ux, &uy);
 #ifdef HAS_MEDIA
+        uint fourth_draw = sample_draw_camera_bounce(i) + SAMPLE_DRAW_BOUNCE_DISTANCE;
+#else
+        uint fourth_draw = bounce_draw + 1u;
+#endif
+        float4 ux, uy;
+        rng_draws4(rng, (uint4)(light_draw, bounce_draw, bounce_draw + 1u, fourth_draw), &ux, &uy);
+#ifdef HAS_MEDIA
+        u_distance = (float2)(ux.s3, uy.s3);
         if (v.type == VERTEX_MEDIUM) {
             path_tracer_light_samples(scene, rng, (float2)(ux.s0, uy.s0), &prev, &v, 0, t, sum);
             float3 wi;

@@ -61,14 +61,13 @@ inline float3 direction_from(const PathVertex* prev, const PathVertex* v) {
 
 #ifdef HAS_MEDIA
 /* One segment of a walk from vertex prev along the unit direction d (cl/medium.h): followed
- * from *o in *medium, with the segment's distance draw (whose number also names its random
- * stream), to the medium or surface vertex where it ends (*v; left as it is if the segment is
- * lost), gathering *tally. Returns the SEGMENT_ kind. */
-inline int walk_segment(const SceneData* scene, Rng* rng, uint distance_draw, const PathVertex* prev, float3* o,
-                        float3 d, int* medium, PathVertex* v, SegmentTally* tally) {
-    rng_seek(rng, distance_draw);
+ * from *o in *medium, with the values u_distance of the segment's distance draw (whose number
+ * also names its random stream), to the medium or surface vertex where it ends (*v; left as it
+ * is if the segment is lost), gathering *tally. Returns the SEGMENT_ kind. */
+inline int walk_segment(const SceneData* scene, const Rng* rng, uint distance_draw, float2 u_distance,
+                        const PathVertex* prev, float3* o, float3 d, int* medium, PathVertex* v, SegmentTally* tally) {
     Hit hit;
-    int segment = trace_through_media(scene, rng, distance_draw, o, d, medium, rng_next2(rng), &hit, tally);
+    int segment = trace_through_media(scene, rng, distance_draw, o, d, medium, u_distance, &hit, tally);
     if (segment == SEGMENT_MEDIUM) {
         *v = vertex_at(VERTEX_MEDIUM, *o, (float3)(0.0f), 0.0f);
         v->wo = -d;
@@ -138,7 +137,9 @@ inline int random_walk(const SceneData* scene, Rng* rng, float3 o, float3 d, flo
 #ifdef HAS_MEDIA
         uint distance_draw = first_draw + SAMPLE_DRAWS_PER_BOUNCE * (uint)(i - start) + SAMPLE_DRAW_BOUNCE_DISTANCE;
         SegmentTally tally;
-        int found = walk_segment(scene, rng, distance_draw, prev, &o, d, &medium, vertex, &tally) != SEGMENT_LOST;
+        rng_seek(rng, distance_draw);
+        float2 u_distance = rng_next2(rng);
+        int found = walk_segment(scene, rng, distance_draw, u_distance, prev, &o, d, &medium, vertex, &tally) != SEGMENT_LOST;
 #else
         Hit hit;
         int found = intersect(scene->nodes, scene->triangles, &scene->cutouts, o, d, INFINITY, &hit);
