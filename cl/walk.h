@@ -131,14 +131,26 @@ inline int random_walk(const SceneData* scene, Rng* rng, float3 o, float3 d, flo
     /* Bounce draws (lobe, direction) two bounces at a time: lanes 0 and 1 for an even bounce,
      * 2 and 3 for the odd one after it (rng_draws4). */
     float4 bounce_x, bounce_y;
+#ifdef HAS_MEDIA
+    float4 distance_x, distance_y;
+#endif
     while (i < end && !is_black(beta)) {
         PathVertex* vertex = &path[i];
         PathVertex* prev = &path[i - 1];
 #ifdef HAS_MEDIA
-        uint distance_draw = first_draw + SAMPLE_DRAWS_PER_BOUNCE * (uint)(i - start) + SAMPLE_DRAW_BOUNCE_DISTANCE;
+        /* Distance draws four segments at a time (as the bounces' draws, below). */
+        int segment = i - start;
+        uint distance_draw = first_draw + SAMPLE_DRAWS_PER_BOUNCE * (uint)segment + SAMPLE_DRAW_BOUNCE_DISTANCE;
+        if ((segment & 3) == 0) {
+            uint4 draws = (uint4)(distance_draw) + (uint4)(0u, 1u, 2u, 3u) * SAMPLE_DRAWS_PER_BOUNCE;
+            rng_draws4(rng, draws, &distance_x, &distance_y);
+        }
+        int lane = segment & 3;
+        float2 u_distance = lane == 0 ? (float2)(distance_x.s0, distance_y.s0)
+                          : lane == 1 ? (float2)(distance_x.s1, distance_y.s1)
+                          : lane == 2 ? (float2)(distance_x.s2, distance_y.s2)
+                                      : (float2)(distance_x.s3, distance_y.s3);
         SegmentTally tally;
-        rng_seek(rng, distance_draw);
-        float2 u_distance = rng_next2(rng);
         int found = walk_segment(scene, rng, distance_draw, u_distance, prev, &o, d, &medium, vertex, &tally) != SEGMENT_LOST;
 #else
         Hit hit;
