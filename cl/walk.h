@@ -151,7 +151,8 @@ inline int random_walk(const SceneData* scene, Rng* rng, float3 o, float3 d, flo
                           : lane == 2 ? (float2)(distance_x.s2, distance_y.s2)
                                       : (float2)(distance_x.s3, distance_y.s3);
         SegmentTally tally;
-        int found = walk_segment(scene, rng, distance_draw, u_distance, prev, &o, d, &medium, vertex, &tally) != SEGMENT_LOST;
+        int found =
+            walk_segment(scene, rng, distance_draw, u_distance, prev, &o, d, &medium, vertex, &tally) != SEGMENT_LOST;
 #else
         Hit hit;
         int found = intersect(scene->nodes, scene->triangles, &scene->cutouts, o, d, INFINITY, &hit);
