@@ -64,6 +64,10 @@ struct RenderOptions {
     // stored camera subpath (cl/kernels/render.cl, PT_FROM_SUBPATHS), instead of one vertex at
     // a time. The two give the same image bit for bit on PoCL (tests/path_tracer_test.cpp).
     bool pt_from_subpaths = false;
+    // Tests only: the strategy pilot runs every candidate, the mixes between the ends too where
+    // pt or lt leads clearly (render/strategy_pilot.h): that lead is measured with pass times,
+    // which a loaded machine skews, and a test of the predicted errors must not depend on it.
+    bool pilot_every_candidate = false;
     // Tests only: pixel whose sample 0 gets a NaN contribution (-1: none).
     int debug_nan_pixel = -1;
     // Tests only: launches after which this renderer's launches fail, as a driver's would

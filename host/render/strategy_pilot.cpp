@@ -700,7 +700,8 @@ StrategyPilot run_strategy_pilot(DeviceContext& device, const DeviceScene& scene
     for (int i : ends) at_ends.push_back(pilot.candidates[size_t(i)]);
     const int end_choice = choose_strategy_candidate(at_ends);
     pilot.lead_at_ends = choice_margin(at_ends, end_choice);
-    if (!between.empty() && (at_ends[size_t(end_choice)].integrator == Integrator::Bdpt ||
+    if (!between.empty() && (options.pilot_every_candidate ||
+                             at_ends[size_t(end_choice)].integrator == Integrator::Bdpt ||
                              pilot.lead_at_ends < kClearLeadMargin)) {
         run_passes(between);
         evaluate(every_candidate());
