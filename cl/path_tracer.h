@@ -106,10 +106,7 @@ inline float3 path_tracer_light_sample(const SceneData* scene, const Rng* rng, i
 #else
     if (is_black(L) || !vertices_visible(scene, v, &sampled)) return (float3)(0.0f);
 #endif
-#if PT_DELTA_LIGHTS_ONLY
-    return L;
-#else
-    if (vertex_is_delta_light(scene, &sampled)) return L;
+    if (PT_DELTA_LIGHTS_ONLY || vertex_is_delta_light(scene, &sampled)) return L;
     sampled.pdf_fwd = vertex_pdf_light_origin(scene, &sampled, v);
 #ifdef HAS_MEDIA
     float pdf_bsdf = in_medium ? vertex_pdf(scene, v, prev, &sampled)
@@ -123,7 +120,6 @@ inline float3 path_tracer_light_sample(const SceneData* scene, const Rng* rng, i
     ratio /= light_sample_selection_ratio(scene, light, v->p); /* sampled.pdf_fwd has select_pdf */
 #endif
     return L * (1.0f / (1.0f + ratio));
-#endif
 }
 
 /* The s = 1 strategy samples at the path's vertex v (draw u: u.x picks the light, its rest and
@@ -198,23 +194,24 @@ inline void path_tracer_sample(const SceneData* scene, Rng* rng, float2 raster, 
 #endif
         v.beta = beta;
         int t = i + 1;
-#if !PT_DELTA_LIGHTS_ONLY
-        /* The forward density from the positions, as random_walk (cl/walk.h says why). */
-        if (i > 1 && !prev.delta) {
-            float3 w = direction_from(&prev, &v);
+        /* The forward density from the positions, as random_walk (cl/walk.h says why), and the
+         * emitter the vertex may be: neither with delta lights only (the condition is constant). */
+        if (!PT_DELTA_LIGHTS_ONLY) {
+            if (i > 1 && !prev.delta) {
+                float3 w = direction_from(&prev, &v);
 #ifdef HAS_MEDIA
-            pdf_fwd = prev.type == VERTEX_MEDIUM ? vertex_scatter_pdf(scene, &prev, prev.wo, w)
-                                                 : bsdf_pdf(&prev_bsdf, prev.wo, w);
+                pdf_fwd = prev.type == VERTEX_MEDIUM ? vertex_scatter_pdf(scene, &prev, prev.wo, w)
+                                                     : bsdf_pdf(&prev_bsdf, prev.wo, w);
 #else
-            pdf_fwd = bsdf_pdf(&prev_bsdf, prev.wo, w);
+                pdf_fwd = bsdf_pdf(&prev_bsdf, prev.wo, w);
 #endif
-        }
-        v.pdf_fwd = convert_density(scene, &prev, pdf_fwd, &v);
+            }
+            v.pdf_fwd = convert_density(scene, &prev, pdf_fwd, &v);
 #ifdef HAS_MEDIA
-        v.pdf_fwd *= v.dist_fwd;
+            v.pdf_fwd *= v.dist_fwd;
 #endif
-        if (vertex_is_light(&v)) path_tracer_add(sum, path_tracer_emitter_hit(scene, &prev, &v, t), 0, t);
-#endif
+            if (vertex_is_light(&v)) path_tracer_add(sum, path_tracer_emitter_hit(scene, &prev, &v, t), 0, t);
+        }
         if (v.type == VERTEX_LIGHT || i == MAX_DEPTH + 1) break;
         /* The vertex's draws (cl/sample_dimensions.h), all at once: the light sample's (light
          * and point) for s = 1 and the bounce's (lobe and Russian roulette, direction); the
