@@ -1,25 +1,30 @@
-/* Caustic merging: a density estimate for the one class of paths that no BDPT strategy but s = 0
- * can sample, caustics seen through mirrors and glass.
+/* Caustic merging: a density estimate for caustics seen through mirrors and glass, the one class
+ * of paths that no BDPT strategy but s = 0 can sample where an area light casts them, and none at
+ * all where a point, spot or directional light does.
  *
  * A connection joins two non-specular vertices, so a strategy that splits a path between x_(i-1)
  * and x_i exists only where neither is specular. In a path
  *     camera x_0, ..., x_k (non-specular), x_(k+1) ... x_(n-1) (specular), light x_n
  * in which no two neighbours of x_0 .. x_k are both non-specular (so x_(k-1) is specular, and x_1
  * too: E S ... S D S ... S L, such as the caustic under a glass ball seen through the ball), no
- * split exists at all: only the camera subpath that hits the light (s = 0) samples it, its MIS
- * weight is 1, and its variance is a path tracer's (on cornell-specular these paths are 0.4% of
- * the image's brightness, and leaving them out of a 64-spp render and its reference lowered its
- * squared error 1.34-1.49x).
+ * split exists at all. From an area light only the camera subpath that hits the light (s = 0)
+ * samples it, its MIS weight is 1, and its variance is a path tracer's (on cornell-specular these
+ * paths are 0.4% of the image's brightness, and leaving them out of a 64-spp render and its
+ * reference lowered its squared error 1.34-1.49x). A point or spot light (a position no ray can
+ * hit) or a directional one (a direction none can) leaves even s = 0 out: every strategy renders
+ * such a caustic black (a spot light's pool of light under a glass, seen through the glass).
  *
  * With merging on, s = 0 leaves these paths out (merged_by_caustic_photons) and the camera
  * subpath's x_k takes them from photons instead: light subpaths traced on their own for the pass
- * keep their first non-specular vertex where it follows one or more specular ones from an area
- * light (caustic_photon_vertex), and x_k sums their power within a radius r, weighted by its
- * BSDF, over pi r^2 and the number of light subpaths (caustic_merges). Both sides are decided by
- * the same rule, so the two estimators split the paths between them and nothing is counted twice
- * or lost. The estimate is biased by the blur of the disk and consistent: the radius shrinks
- * with the pass (host/render/caustic_photons.h). Materials are either wholly specular (mirror,
- * glass) or not at all, so a vertex's delta flag is its material's. */
+ * keep their first non-specular vertex where it follows one or more specular ones from any light
+ * but the environment (caustic_photon_vertex), and x_k sums their power within a radius r,
+ * weighted by its BSDF, over pi r^2 and the number of light subpaths (caustic_merges). Both sides
+ * are decided by the same rule, so the two estimators split the paths between them and nothing
+ * is counted twice or lost; a delta light's photons add paths nothing else counts. The estimate
+ * is biased by the blur of the disk and consistent: the radius shrinks with the pass
+ * (host/render/caustic_photons.h). An environment's caustics stay with s = 0, which samples them
+ * (a camera subpath that escapes is never left out). Materials are either wholly
+ * specular (mirror, glass) or not at all, so a vertex's delta flag is its material's. */
 #ifndef CLBDPT_CAUSTIC_MERGING_H
 #define CLBDPT_CAUSTIC_MERGING_H
 
@@ -49,9 +54,10 @@ inline int merged_by_caustic_photons(const SceneData* scene, const PathVertex* c
 }
 
 /* The index of a light subpath's caustic photon: its first non-specular vertex, if that is a
- * surface vertex reached from an area light through specular ones only (index >= 2); else 0. */
+ * surface vertex reached from a light other than the environment through specular ones only
+ * (index >= 2); else 0. */
 inline int caustic_photon_vertex(const SceneData* scene, const PathVertex* light_path, int n_light) {
-    if (n_light < 3 || scene->lights[light_path[0].light].kind != LIGHT_AREA) return 0;
+    if (n_light < 3 || scene->lights[light_path[0].light].kind == LIGHT_ENVIRONMENT) return 0;
     for (int i = 1; i < n_light; ++i) {
         const PathVertex* v = &light_path[i];
         if (v->type != VERTEX_SURFACE) return 0;

@@ -37,9 +37,9 @@ bool scene_has_merged_caustics(const DeviceScene& scene) {
     const bool specular = std::any_of(scene.materials.begin(), scene.materials.end(), [](const Material& m) {
         return m.kind == MATERIAL_MIRROR || m.kind == MATERIAL_GLASS;
     });
-    const bool area_light =
-        std::any_of(scene.lights.begin(), scene.lights.end(), [](const Light& l) { return l.kind == LIGHT_AREA; });
-    return specular && area_light;
+    const bool casts_photons =
+        std::any_of(scene.lights.begin(), scene.lights.end(), [](const Light& l) { return l.kind != LIGHT_ENVIRONMENT; });
+    return specular && casts_photons;
 }
 
 CausticPhotons::CausticPhotons(DeviceContext& device, const cl::Program& program, const SceneBuffers& buffers,

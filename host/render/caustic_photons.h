@@ -20,8 +20,9 @@
 
 namespace clbdpt {
 
-// Whether a scene has paths that caustic merging takes over: a mirror or glass material and an
-// area light, and no media (whose vertices the merging rule does not cover).
+// Whether a scene has paths that caustic merging takes over: a mirror or glass material and a
+// light other than the environment (area, point, spot or directional), and no media (whose
+// vertices the merging rule does not cover).
 bool scene_has_merged_caustics(const DeviceScene& scene);
 
 class CausticPhotons {
