@@ -174,78 +174,90 @@ TEST(SceneAgreement, CausticMergingKeepsTheImage) {
     expect_agree(bdpt, pt, kSigmas, "cornell-specular: bdpt with caustic merging vs pt");
 }
 
-// A point light's caustic seen in a mirror: light that leaves a point light by way of a mirror,
-// lights a diffuse floor and reaches the camera by way of the mirror again. No strategy samples
-// such a path (each neighbour of the floor vertex is specular, and no ray can hit the light), so
-// bdpt and pt render it black and caustic merging alone renders it (cl/caustic_merging.h). A
-// plane mirror gives the exact image: the floor seen in the mirror x = 0 from eye E, lit by
-// light L directly and by way of the mirror, is the floor seen from E's mirror image, lit by L
-// and by L's mirror image with the mirror's reflectance times L's intensity, with no mirror at
-// all; that image, flipped left to right and times the reflectance (the camera's own reflection
-// in the mirror), is rendered by pt. At depth 3 with the mirror
-// (E M D L and E M D M L; longer paths would need the mirror image of the floor) against any
-// depth without it (E D L and E D L', the floor being the only surface), the paths correspond
-// one to one. The camera sees the mirror alone, and through it the floor alone, 1.3 to 5.9 from
-// the mirror. Merged with 4x the default radius: the blur's bias on a light this smooth stays
-// below 1% of a region (irradiance varies on a scale of 2 units, the radius is 0.17), and the
-// photons' noise 4x smaller than at the default. Same regions and tolerance as above.
-TEST(SceneAgreement, PointLightCausticSeenInAMirror) {
+// A delta light's caustic seen in a mirror: light that leaves a point or directional light by
+// way of a mirror, lights a diffuse floor and reaches the camera by way of the mirror again. No
+// strategy samples such a path (each neighbour of the floor vertex is specular, and no ray can
+// hit the light), so bdpt and pt render it black and caustic merging alone renders it
+// (cl/caustic_merging.h). A plane mirror gives the exact image: the floor seen in the mirror
+// x = 0 from eye E, lit by light L directly and by way of the mirror, is the floor seen from E's
+// mirror image, lit by L and by L's mirror image with the mirror's reflectance times L's
+// intensity (radiance), with no mirror at all; that image, flipped left to right and times the
+// reflectance (the camera's own reflection in the mirror), is rendered by pt. At depth 3 with
+// the mirror (E M D L and E M D M L; longer paths would need the mirror image of the floor)
+// against any depth without it (E D L and E D L', the floor being the only surface), the paths
+// correspond one to one. The camera sees the mirror alone, and through it the floor alone, 1.3
+// to 5.9 from the mirror; the mirror is tall enough that the directional light's reflection
+// covers the whole floor. Merged with 4x the default radius: the blur's bias on a light this
+// smooth stays below 1% of a region (a point light's irradiance varies on a scale of 2 units,
+// the radius is 0.17; a directional light's is uniform), and the photons' noise 4x smaller than
+// at the default. Same regions and tolerance as above.
+TEST(SceneAgreement, DeltaLightCausticSeenInAMirror) {
     const float reflectance = 0.8f;
-    const Vec3 light{0.5f, 2.0f, 0.0f}, intensity{6.0f, 6.0f, 6.0f};
     const auto floor_quad = [](SceneBuilder& b) {
         const int white = b.material(diffuse_material({0.7f, 0.7f, 0.7f}), "floor");
         b.quad({0, 0, 4}, {8, 0, 4}, {8, 0, -4}, {0, 0, -4}, white);
     };
-    SceneBuilder with_mirror;
-    floor_quad(with_mirror);
-    const int mirror = with_mirror.material(mirror_material({reflectance, reflectance, reflectance}), "mirror");
-    with_mirror.quad({0, 0, -4}, {0, 6, -4}, {0, 6, 4}, {0, 0, 4}, mirror);
-    with_mirror.camera({1, 4, 0}, {0, 3, 0}, 30.0f);
-    with_mirror.scene.lights = {point_light(light, intensity)};
-    SceneBuilder mirrored;
-    floor_quad(mirrored);
-    mirrored.camera({-1, 4, 0}, {0, 3, 0}, 30.0f);
-    mirrored.scene.lights = {point_light(light, intensity),
-                             point_light({-light.x, light.y, light.z}, intensity * reflectance)};
-    const DeviceScene scene = build_device_scene(with_mirror.scene, kFilm, kFilm);
-    const DeviceScene reference_scene = build_device_scene(mirrored.scene, kFilm, kFilm);
-    ASSERT_TRUE(scene_has_merged_caustics(scene));
-
+    LightDesc directional;
+    directional.kind = LightDesc::Kind::Directional;
+    directional.direction = normalize(Vec3{-1.0f, -1.2f, 0.3f});
+    directional.color = {2.0f, 2.0f, 2.0f};
+    const LightDesc lights[] = {point_light({0.5f, 2.0f, 0.0f}, {6.0f, 6.0f, 6.0f}), directional};
     const int passes = scaled_passes(96);
-    RegionStats reference = render_stats_or_fail(reference_scene, make_options(Integrator::Pt, kMaxDepth, 801), passes,
-                                                 kBlocks, "pt without the mirror");
-    // Left to right: region (row, column) of one image is (row, blocks - 1 - column) of the other.
-    const RegionStats flipped_reference = [&] {
-        RegionStats f = reference;
+    uint32_t seed = 801;
+    for (const LightDesc& light : lights) {
+        const std::string what = light.kind == LightDesc::Kind::Point ? "point light" : "directional light";
+        SceneBuilder with_mirror;
+        floor_quad(with_mirror);
+        const int mirror = with_mirror.material(mirror_material({reflectance, reflectance, reflectance}), "mirror");
+        with_mirror.quad({0, 0, -4}, {0, 8, -4}, {0, 8, 4}, {0, 0, 4}, mirror);
+        with_mirror.camera({1, 4, 0}, {0, 3, 0}, 30.0f);
+        with_mirror.scene.lights = {light};
+        // The light's mirror image: position and direction reflected in x = 0.
+        LightDesc image = light;
+        image.position.x = -light.position.x;
+        image.direction.x = -light.direction.x;
+        image.color = light.color * reflectance;
+        SceneBuilder mirrored;
+        floor_quad(mirrored);
+        mirrored.camera({-1, 4, 0}, {0, 3, 0}, 30.0f);
+        mirrored.scene.lights = {light, image};
+        const DeviceScene scene = build_device_scene(with_mirror.scene, kFilm, kFilm);
+        const DeviceScene reference_scene = build_device_scene(mirrored.scene, kFilm, kFilm);
+        ASSERT_TRUE(scene_has_merged_caustics(scene)) << what;
+
+        const RegionStats reference = render_stats_or_fail(reference_scene, make_options(Integrator::Pt, kMaxDepth, seed++),
+                                                           passes, kBlocks, what + ": pt without the mirror");
+        // Left to right: region (row, column) of one image is (row, blocks - 1 - column) of the other.
+        RegionStats expected = reference;
         for (int row = 0; row < kBlocks; ++row)
             for (int column = 0; column < kBlocks; ++column) {
                 const size_t to = size_t(row * kBlocks + column), from = size_t(row * kBlocks + kBlocks - 1 - column);
-                f.mean[to] = reflectance * reference.mean[from];
-                f.std_error[to] = reflectance * reference.std_error[from];
+                expected.mean[to] = reflectance * reference.mean[from];
+                expected.std_error[to] = reflectance * reference.std_error[from];
             }
-        f.image_mean *= reflectance;
-        f.image_std_error *= reflectance;
-        return f;
-    }();
-    RenderOptions merged = make_options(Integrator::Bdpt, 3, 802);
-    merged.spp = passes;
-    merged.caustic_merging = true;
-    merged.merge_radius = 4.0;
-    RegionStats bdpt = render_stats_or_fail(scene, merged, passes, kBlocks, "bdpt with caustic merging");
-    expect_agree(bdpt, flipped_reference, kSigmas, "point light's caustic in a mirror: bdpt with merging vs the mirror image");
+        expected.image_mean *= reflectance;
+        expected.image_std_error *= reflectance;
 
-    // Without merging the caustic is missing: the image mean fails by far (measured: 0.71x the
-    // exact one, 5 000 standard errors off).
-    RenderOptions plain = merged;
-    plain.caustic_merging = false;
-    plain.seed = 803;
-    RegionStats black = render_stats_or_fail(scene, plain, passes, kBlocks, "bdpt without caustic merging");
-    const RegionStats& expected = flipped_reference;
-    const double z = (expected.image_mean - black.image_mean) /
-                     std::sqrt(expected.image_std_error * expected.image_std_error +
-                               black.image_std_error * black.image_std_error);
-    EXPECT_GT(z, 4 * kSigmas) << "without merging: " << black.image_mean << " +- " << black.image_std_error
-                              << " against " << expected.image_mean << " +- " << expected.image_std_error;
+        RenderOptions merged = make_options(Integrator::Bdpt, 3, seed++);
+        merged.spp = passes;
+        merged.caustic_merging = true;
+        merged.merge_radius = 4.0;
+        const RegionStats bdpt = render_stats_or_fail(scene, merged, passes, kBlocks, what + ": bdpt with caustic merging");
+        expect_agree(bdpt, expected, kSigmas, what + "'s caustic in a mirror: bdpt with merging vs the mirror image");
+
+        // Without merging the caustic is missing: the image mean fails by far (measured: the point
+        // light's 0.71x the exact one, 5 000 standard errors off).
+        RenderOptions plain = merged;
+        plain.caustic_merging = false;
+        plain.seed = seed++;
+        const RegionStats black = render_stats_or_fail(scene, plain, passes, kBlocks, what + ": bdpt without merging");
+        const double z = (expected.image_mean - black.image_mean) /
+                         std::sqrt(expected.image_std_error * expected.image_std_error +
+                                   black.image_std_error * black.image_std_error);
+        EXPECT_GT(z, 4 * kSigmas) << what << " without merging: " << black.image_mean << " +- "
+                                  << black.image_std_error << " against " << expected.image_mean << " +- "
+                                  << expected.image_std_error;
+    }
 }
 
 INSTANTIATE_TEST_SUITE_P(Bundled, SceneAgreementTest,
