@@ -54,8 +54,8 @@ struct RenderOptions {
     // it; with drop_non_finite the sample (its pixel value and its splats) is left out and
     // counted in RenderStats instead, so a long render survives it (the command line).
     bool drop_non_finite = false;
-    // bdpt: caustics seen through mirrors and glass, which only s = 0 samples, estimated from
-    // each pass's caustic photons instead (cl/caustic_merging.h), where the scene has them
+    // bdpt: caustics seen through mirrors and glass, which only s = 0 samples (none where a
+    // delta light casts them), estimated from each pass's caustic photons instead (cl/caustic_merging.h), where the scene has them
     // (scene_has_merged_caustics) and strategy images are off; the merge radius in pixel
     // footprints at the scene's centre (render/caustic_photons.h).
     bool caustic_merging = false;
