@@ -23,8 +23,11 @@
  * is counted twice or lost; a delta light's photons add paths nothing else counts. The estimate
  * is biased by the blur of the disk and consistent: the radius shrinks with the pass
  * (host/render/caustic_photons.h). An environment's caustics stay with s = 0, which samples them
- * (a camera subpath that escapes is never left out). Materials are either wholly
- * specular (mirror, glass) or not at all, so a vertex's delta flag is its material's. */
+ * (a camera subpath that escapes is never left out). A vertex scattered in a medium is
+ * non-specular (connectible) on both sides, and merging happens on surfaces only, so a path
+ * that scatters in a medium next to x_k stays with the strategies that sample it; segments
+ * through media carry their transmittance in both subpaths' throughputs. Materials are either
+ * wholly specular (mirror, glass) or not at all, so a vertex's delta flag is its material's. */
 #ifndef CLBDPT_CAUSTIC_MERGING_H
 #define CLBDPT_CAUSTIC_MERGING_H
 

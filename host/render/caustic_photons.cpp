@@ -33,7 +33,6 @@ constexpr cl_uint kTraceArg = SceneBuffers::kSceneArgCount;
 }  // namespace
 
 bool scene_has_merged_caustics(const DeviceScene& scene) {
-    if (!scene.media.empty()) return false;
     const bool specular = std::any_of(scene.materials.begin(), scene.materials.end(), [](const Material& m) {
         return m.kind == MATERIAL_MIRROR || m.kind == MATERIAL_GLASS;
     });

@@ -21,8 +21,8 @@
 namespace clbdpt {
 
 // Whether a scene has paths that caustic merging takes over: a mirror or glass material and a
-// light other than the environment (area, point, spot or directional), and no media (whose
-// vertices the merging rule does not cover).
+// light other than the environment (area, point, spot or directional). Media may fill the
+// scene: a medium vertex counts as non-specular on both sides of the split.
 bool scene_has_merged_caustics(const DeviceScene& scene);
 
 class CausticPhotons {
