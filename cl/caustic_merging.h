@@ -23,7 +23,9 @@
  * is counted twice or lost; a delta light's photons add paths nothing else counts. The estimate
  * is biased by the blur of the disk and consistent: the radius shrinks with the pass
  * (host/render/caustic_photons.h). An environment's caustics stay with s = 0, which samples them
- * (a camera subpath that escapes is never left out). A vertex scattered in a medium is
+ * (a camera subpath that escapes is never left out): its light subpaths start on a disk as wide
+ * as the scene, so few meet a small glass (sky with a glass ball of radius 0.45 added: no photon
+ * in 96 passes of 800 light subpaths, where s = 0 found up to 0.6% of a region's brightness). A vertex scattered in a medium is
  * non-specular (connectible) on both sides, and merging happens on surfaces only, so a path
  * that scatters in a medium next to x_k stays with the strategies that sample it; segments
  * through media carry their transmittance in both subpaths' throughputs. Materials are either
