@@ -1,14 +1,14 @@
 /* Caustic merging: a density estimate for caustics seen through mirrors and glass, the one class
- * of paths that no BDPT strategy but s = 0 can sample where an area light casts them, and none at
- * all where a point, spot or directional light does.
+ * of paths that no BDPT strategy but s = 0 can sample where an area light or the environment
+ * casts them, and none at all where a point, spot or directional light does.
  *
  * A connection joins two non-specular vertices, so a strategy that splits a path between x_(i-1)
  * and x_i exists only where neither is specular. In a path
  *     camera x_0, ..., x_k (non-specular), x_(k+1) ... x_(n-1) (specular), light x_n
  * in which no two neighbours of x_0 .. x_k are both non-specular (so x_(k-1) is specular, and x_1
  * too: E S ... S D S ... S L, such as the caustic under a glass ball seen through the ball), no
- * split exists at all. From an area light only the camera subpath that hits the light (s = 0)
- * samples it, its MIS weight is 1, and its variance is a path tracer's (on cornell-specular these
+ * split exists at all. From an area light or the environment only the camera subpath that hits
+ * the light (s = 0) samples it, its MIS weight is 1, and its variance is a path tracer's (on cornell-specular these
  * paths are 0.4% of the image's brightness, and leaving them out of a 64-spp render and its
  * reference lowered its squared error 1.34-1.49x). A point or spot light (a position no ray can
  * hit) or a directional one (a direction none can) leaves even s = 0 out: every strategy renders
@@ -16,16 +16,17 @@
  *
  * With merging on, s = 0 leaves these paths out (merged_by_caustic_photons) and the camera
  * subpath's x_k takes them from photons instead: light subpaths traced on their own for the pass
- * keep their first non-specular vertex where it follows one or more specular ones from any light
- * but the environment (caustic_photon_vertex), and x_k sums their power within a radius r,
+ * keep their first non-specular vertex where it follows one or more specular ones from a light
+ * (caustic_photon_vertex), and x_k sums their power within a radius r,
  * weighted by its BSDF, over pi r^2 and the number of light subpaths (caustic_merges). Both sides
  * are decided by the same rule, so the two estimators split the paths between them and nothing
  * is counted twice or lost; a delta light's photons add paths nothing else counts. The estimate
  * is biased by the blur of the disk and consistent: the radius shrinks with the pass
- * (host/render/caustic_photons.h). An environment's caustics stay with s = 0, which samples them
- * (a camera subpath that escapes is never left out): its light subpaths start on a disk as wide
- * as the scene, so few meet a small glass (sky with a glass ball of radius 0.45 added: no photon
- * in 96 passes of 800 light subpaths, where s = 0 found up to 0.6% of a region's brightness). A vertex scattered in a medium is
+ * (host/render/caustic_photons.h). The photons' emitted rays are aimed at the sphere about the
+ * mirrors and glass, where their first hit must lie (light_emission_aimed, cl/lights.h): an
+ * environment's or a directional light's would otherwise start on a disk as wide as the scene,
+ * and few would meet a small glass (sky with a glass ball of radius 0.45 added: no photon in 96
+ * passes of 800 light subpaths). A vertex scattered in a medium is
  * non-specular (connectible) on both sides, and merging happens on surfaces only, so a path
  * that scatters in a medium next to x_k stays with the strategies that sample it; segments
  * through media carry their transmittance in both subpaths' throughputs. Materials are either
@@ -47,22 +48,28 @@ inline int is_caustic_merge_vertex(const SceneData* scene, const PathVertex* cam
     return 1;
 }
 
-/* Whether camera_path[0 .. t - 1], ending on an emitter (strategy s = 0), is one of the paths
- * the photons take over: the vertex before the emitter is specular, and so is every vertex back
- * to the last non-specular one, which is a merge vertex. */
+/* Whether camera_path[0 .. t - 1], ending on an emitter (strategy s = 0: an area light's surface
+ * or, for a subpath that escaped, the environment), is one of the paths the photons take over:
+ * the vertex before the emitter is specular, and so is every vertex back to the last
+ * non-specular one, which is a merge vertex. */
 inline int merged_by_caustic_photons(const SceneData* scene, const PathVertex* camera_path, int t) {
     int e = t - 1;
-    if (e < 4 || camera_path[e].type != VERTEX_SURFACE || !camera_path[e - 1].delta) return 0;
+    if (e < 4 || !camera_path[e - 1].delta) return 0;
+#ifdef HAS_ENVIRONMENT
+    /* The environment's light subpaths, and so its photons, leave only along the directions its
+     * sampling can take (bdpt's takes the map's texels above its mean, cl/lights.h): along the
+     * others s = 0 keeps the path. */
+    if (camera_path[e].type == VERTEX_LIGHT && environment_pdf_w(scene, -camera_path[e].wo) <= 0.0f) return 0;
+#endif
     int k = e - 1;
     while (camera_path[k].delta) --k; /* stops at the camera vertex at the latest */
     return is_caustic_merge_vertex(scene, camera_path, k);
 }
 
 /* The index of a light subpath's caustic photon: its first non-specular vertex, if that is a
- * surface vertex reached from a light other than the environment through specular ones only
- * (index >= 2); else 0. */
+ * surface vertex reached from the light through specular ones only (index >= 2); else 0. */
 inline int caustic_photon_vertex(const SceneData* scene, const PathVertex* light_path, int n_light) {
-    if (n_light < 3 || scene->lights[light_path[0].light].kind == LIGHT_ENVIRONMENT) return 0;
+    if (n_light < 3) return 0;
     for (int i = 1; i < n_light; ++i) {
         const PathVertex* v = &light_path[i];
         if (v->type != VERTEX_SURFACE) return 0;

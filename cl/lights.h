@@ -461,6 +461,54 @@ inline int light_sample_le(const SceneData* scene, int index, float2 u_pos, floa
     return er->pdf_pos > 0.0f && er->pdf_dir > 0.0f && !is_black(er->le);
 }
 
+/* Re-aims er, an emitted ray of light `index` from light_sample_le with the same draws, at the
+ * sphere aim (xyz the centre, w the radius), so that every ray that can meet what the sphere
+ * bounds is still drawn, with the densities of the aimed draw (caustic photons, whose first hit
+ * must be a mirror or glass inside it: cl/caustic_merging.h). Infinite lights keep the
+ * direction and take the origin on the disk of the sphere's radius about its centre, across the
+ * direction and outside the scene; the others keep the origin and take the direction uniformly
+ * in the cone of the sphere seen from it, unless the origin lies in the sphere. Returns 0 where
+ * the aimed ray carries nothing (an area light's back, a spot light's outside). */
+inline int light_emission_aimed(const SceneData* scene, int index, float2 u_pos, float2 u_dir, float4 aim,
+                                EmittedRay* er) {
+    __global const Light* light = &scene->lights[index];
+    float3 c = aim.xyz;
+    float r = aim.w;
+    if (light_is_infinite(light->kind)) {
+        float3 w_light = -er->dir, s_axis, t_axis;
+        coordinate_system(w_light, &s_axis, &t_axis);
+        float2 cd = sample_concentric_disk(u_pos);
+        /* Far enough back along the light's direction to be outside the scene's bounding sphere. */
+        float back = length(c - scene_center(scene)) + scene_radius(scene) + r;
+        er->origin = c + r * (cd.x * s_axis + cd.y * t_axis) + back * w_light;
+        er->pdf_pos = 1.0f / (PI_F * r * r);
+        return 1;
+    }
+    float3 to_c = c - er->origin;
+    float d2 = dot(to_c, to_c);
+    if (d2 <= r * r) return 1;
+    float sin2 = r * r / d2;
+    float one_minus_cos = sin2 / (1.0f + sqrt(1.0f - sin2)); /* 1 - cos without cancellation */
+    Frame f = frame_from_normal(to_c * rsqrt(d2));
+    float3 dir = from_local(&f, sample_uniform_cone(u_dir, one_minus_cos));
+    er->pdf_dir = uniform_cone_pdf(one_minus_cos);
+    er->dir = dir;
+    switch (light->kind) {
+    case LIGHT_AREA:
+        /* A diffuse emitter's radiance is the same toward every direction in front of it. */
+        return dot(er->n, dir) > 0.0f;
+#ifdef HAS_SPOT_LIGHTS
+    case LIGHT_SPOT:
+        er->n = dir;
+        er->le = xyz(light->emission) * spot_falloff(light, dir);
+        return !is_black(er->le);
+#endif
+    default:
+        er->n = dir;
+        return 1;
+    }
+}
+
 /* Pdf_Le: densities with which light_sample_le would emit from `p` (normal n) along `dir`. */
 inline void light_pdf_le(const SceneData* scene, int index, float3 n, float3 dir, float* pdf_pos, float* pdf_dir) {
     __global const Light* light = &scene->lights[index];

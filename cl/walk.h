@@ -277,17 +277,11 @@ inline int generate_camera_subpath(const SceneData* scene, Rng* rng, float2 rast
                        sample_draw_camera_bounce(0), path, 1) + 1;
 }
 
-/* Light subpath: at most max_depth + 1 vertices (the light and max_depth scattering vertices). */
-inline int generate_light_subpath(const SceneData* scene, Rng* rng, int max_depth, PathVertex* path) {
-    rng_seek(rng, SAMPLE_DRAW_LIGHT_POSITION);
-    float2 u_pos = rng_next2(rng); /* u_pos.x picks the light, its rest and u_pos.y the point */
-    rng_seek(rng, SAMPLE_DRAW_LIGHT_DIRECTION);
-    float2 u_dir = rng_next2(rng);
-    if (scene->info->light_count == 0) return 0;
-    float select_pdf, u_rest;
-    int light = sample_light_index(scene, u_pos.x, &select_pdf, &u_rest);
-    EmittedRay er;
-    if (!light_sample_le(scene, light, (float2)(u_rest, u_pos.y), u_dir, &er)) return 0;
+/* The light subpath that starts with emitted ray er from `light` (chosen with probability
+ * select_pdf): at most max_depth + 1 vertices. */
+inline int light_subpath_from(const SceneData* scene, Rng* rng, int max_depth, int light, float select_pdf,
+                              const EmittedRay* emitted, PathVertex* path) {
+    const EmittedRay er = *emitted;
     int kind = scene->lights[light].kind;
     PathVertex* lv = &path[0];
     *lv = kind == LIGHT_AREA ? vertex_at(VERTEX_LIGHT, er.origin, er.n, er.origin_error)
@@ -319,6 +313,28 @@ inline int generate_light_subpath(const SceneData* scene, Rng* rng, int max_dept
         lv->pdf_fwd = infinite_light_density(scene, er.dir);
     }
     return n + 1;
+}
+
+/* Light subpath: at most max_depth + 1 vertices (the light and max_depth scattering vertices).
+ * With aim (caustic photons alone), its emitted ray is aimed at that sphere
+ * (caustic_photon_emission); its densities are then no BDPT strategy's. */
+inline int generate_light_subpath_aimed(const SceneData* scene, Rng* rng, int max_depth, PathVertex* path,
+                                        const float4* aim) {
+    rng_seek(rng, SAMPLE_DRAW_LIGHT_POSITION);
+    float2 u_pos = rng_next2(rng); /* u_pos.x picks the light, its rest and u_pos.y the point */
+    rng_seek(rng, SAMPLE_DRAW_LIGHT_DIRECTION);
+    float2 u_dir = rng_next2(rng);
+    if (scene->info->light_count == 0) return 0;
+    float select_pdf, u_rest;
+    int light = sample_light_index(scene, u_pos.x, &select_pdf, &u_rest);
+    EmittedRay er;
+    if (!light_sample_le(scene, light, (float2)(u_rest, u_pos.y), u_dir, &er)) return 0;
+    if (aim && !light_emission_aimed(scene, light, (float2)(u_rest, u_pos.y), u_dir, *aim, &er)) return 0;
+    return light_subpath_from(scene, rng, max_depth, light, select_pdf, &er, path);
+}
+
+inline int generate_light_subpath(const SceneData* scene, Rng* rng, int max_depth, PathVertex* path) {
+    return generate_light_subpath_aimed(scene, rng, max_depth, path, 0);
 }
 
 #endif

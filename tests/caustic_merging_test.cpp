@@ -62,23 +62,6 @@ TEST(CausticMerging, NothingChangesWithoutSpecularSurfaces) {
     EXPECT_EQ(render_image(scene, merging, 2), render_image(scene, plain, 2));
 }
 
-// An environment's caustics stay with s = 0 (cl/caustic_merging.h): sky with a glass ball has
-// no photons to merge and renders the same image with merging on.
-TEST(CausticMerging, NothingChangesUnderAnEnvironmentAlone) {
-    const std::string path = scene_path("sky");
-    if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " does not exist";
-    SceneBuilder b;
-    b.scene = load_scene(path);
-    b.sphere({0.0f, 0.45f, -0.8f}, 0.45f, 3, false, b.material(glass_material(1.5f), "glass"));
-    const DeviceScene scene = build_device_scene(b.scene, kFilm, kFilm);
-    EXPECT_FALSE(scene_has_merged_caustics(scene));
-    const RenderOptions merging = merging_options(14);
-    EXPECT_EQ(Renderer(test_device(), scene, merging).caustic_photons(), nullptr);
-    RenderOptions plain = merging;
-    plain.caustic_merging = false;
-    EXPECT_EQ(render_image(scene, merging, 2), render_image(scene, plain, 2));
-}
-
 // Strategy images record each (s, t) apart, and the photons are none of them: merging stays off.
 TEST(CausticMerging, OffWithStrategyImages) {
     const std::string path = scene_path("cornell-specular");

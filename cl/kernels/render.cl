@@ -235,10 +235,11 @@ __kernel void render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, __global float
  * from its own sample sequence, as far as its first non-specular vertex, and appends that vertex
  * to out if it is a caustic photon (cl/caustic_merging.h), with i in beta.w's bits: the host
  * orders them by it, so the order the items ran in does not matter. *count holds the number
- * appended. */
+ * appended. aim: the sphere (xyz centre, w radius) that bounds every mirror and glass triangle;
+ * the subpaths' emitted rays are aimed at it (light_emission_aimed). */
 __kernel void trace_caustic_photons(SCENE_KERNEL_ARGS, uint paths_per_slice, uint first_slice, uint first_item,
                                     uint item_count, uint seed, __global CausticPhoton* out,
-                                    __global volatile uint* count) {
+                                    __global volatile uint* count, float4 aim) {
     if (get_global_id(0) >= item_count) return;
     uint item = first_item + (uint)get_global_id(0);
     uint rays_traced = 0;
@@ -246,7 +247,9 @@ __kernel void trace_caustic_photons(SCENE_KERNEL_ARGS, uint paths_per_slice, uin
     scene.walk_ends_at_scattering = 1;
     Rng rng = rng_init(item % paths_per_slice, first_slice + item / paths_per_slice, seed ^ 0x63a9f1d5u);
     PathVertex light_path[MAX_DEPTH + 1];
-    int n_light = generate_light_subpath(&scene, &rng, MAX_DEPTH, light_path);
+    /* Aimed at the sphere about every mirror and glass triangle, which a caustic photon's first
+     * hit lies on (the host's CausticPhotons). */
+    int n_light = generate_light_subpath_aimed(&scene, &rng, MAX_DEPTH, light_path, &aim);
     int m = caustic_photon_vertex(&scene, light_path, n_light);
     if (m == 0) return;
     const PathVertex* v = &light_path[m];

@@ -21,9 +21,14 @@
 namespace clbdpt {
 
 // Whether a scene has paths that caustic merging takes over: a mirror or glass material and a
-// light other than the environment (area, point, spot or directional). Media may fill the
-// scene: a medium vertex counts as non-specular on both sides of the split.
+// light (of any kind). Media may fill the scene: a medium vertex counts as non-specular on both
+// sides of the split.
 bool scene_has_merged_caustics(const DeviceScene& scene);
+
+// The sphere about the box of every mirror and glass triangle (xyz centre, w radius): a caustic
+// photon's first hit lies in it, so its emitted ray is aimed at it (cl/lights.h,
+// light_emission_aimed).
+cl_float4 specular_bounding_sphere(const DeviceScene& scene);
 
 class CausticPhotons {
 public:
@@ -67,6 +72,7 @@ private:
     uint32_t slice_count_;
     uint32_t paths_per_slice_;
     int local_size_;  // the render kernel's work-group size (0: the driver's choice)
+    cl_float4 aim_;   // the photons' emitted rays are aimed at this sphere (specular_bounding_sphere)
     double radius0_;
     std::vector<CausticPhoton> photons_;
     std::vector<cl_uint> cells_;
