@@ -279,8 +279,9 @@ inline int generate_camera_subpath(const SceneData* scene, Rng* rng, float2 rast
 
 /* The light subpath that starts with emitted ray er from `light` (chosen with probability
  * select_pdf): at most max_depth + 1 vertices. */
-inline int light_subpath_from(const SceneData* scene, Rng* rng, int max_depth, int light, float select_pdf,
-                              const EmittedRay* emitted, PathVertex* path) {
+__attribute__((always_inline)) inline int light_subpath_from(const SceneData* scene, Rng* rng, int max_depth,
+                                                             int light, float select_pdf, const EmittedRay* emitted,
+                                                             PathVertex* path) {
     const EmittedRay er = *emitted;
     int kind = scene->lights[light].kind;
     PathVertex* lv = &path[0];
