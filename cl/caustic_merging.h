@@ -8,29 +8,31 @@
  * in which no two neighbours of x_0 .. x_k are both non-specular (so x_(k-1) is specular, and x_1
  * too: E S ... S D S ... S L, such as the caustic under a glass ball seen through the ball), no
  * split exists at all. From an area light or the environment only the camera subpath that hits
- * the light (s = 0) samples it, its MIS weight is 1, and its variance is a path tracer's (on cornell-specular these
- * paths are 0.4% of the image's brightness, and leaving them out of a 64-spp render and its
- * reference lowered its squared error 1.34-1.49x). A point or spot light (a position no ray can
- * hit) or a directional one (a direction none can) leaves even s = 0 out: every strategy renders
- * such a caustic black (a spot light's pool of light under a glass, seen through the glass).
+ * the light (s = 0) samples it, its MIS weight is 1, and its variance is a path tracer's (on
+ * cornell-specular these paths are 0.4% of the image's brightness, and leaving them out of a
+ * 64-spp render and its reference lowered its squared error 1.34-1.49x). A point or spot light
+ * (a position no ray can hit) or a directional one (a direction none can) leaves even s = 0 out:
+ * every strategy renders such a caustic black (a spot light's pool of light under a glass, seen
+ * through the glass).
  *
  * With merging on, s = 0 leaves these paths out (merged_by_caustic_photons) and the camera
  * subpath's x_k takes them from photons instead: light subpaths traced on their own for the pass
  * keep their first non-specular vertex where it follows one or more specular ones from a light
- * (caustic_photon_vertex), and x_k sums their power within a radius r,
- * weighted by its BSDF, over pi r^2 and the number of light subpaths (caustic_merges). Both sides
- * are decided by the same rule, so the two estimators split the paths between them and nothing
- * is counted twice or lost; a delta light's photons add paths nothing else counts. The estimate
- * is biased by the blur of the disk and consistent: the radius shrinks with the pass
- * (host/render/caustic_photons.h). The photons' emitted rays are aimed at the sphere about the
- * mirrors and glass, where their first hit must lie (light_emission_aimed, cl/lights.h): an
- * environment's or a directional light's would otherwise start on a disk as wide as the scene,
- * and few would meet a small glass (sky with a glass ball of radius 0.45 added: no photon in 96
- * passes of 800 light subpaths). A vertex scattered in a medium is
- * non-specular (connectible) on both sides, and merging happens on surfaces only, so a path
- * that scatters in a medium next to x_k stays with the strategies that sample it; segments
- * through media carry their transmittance in both subpaths' throughputs. Materials are either
- * wholly specular (mirror, glass) or not at all, so a vertex's delta flag is its material's. */
+ * (caustic_photon_vertex), and x_k sums their power within a radius r, weighted by its BSDF, over
+ * pi r^2 and the number of light subpaths (caustic_merges). Both sides are decided by the same
+ * rule, so the two estimators split the paths between them and nothing is counted twice or lost;
+ * a delta light's photons add paths nothing else counts. The estimate is biased by the blur of
+ * the disk and consistent: the radius shrinks with the pass (host/render/caustic_photons.h).
+ *
+ * The photons' emitted rays are aimed at the sphere about the mirrors and glass, where their
+ * first hit must lie (light_emission_aimed, cl/lights.h): an environment's or a directional
+ * light's would otherwise start on a disk as wide as the scene, and few would meet a small glass
+ * (sky with a glass ball of radius 0.45 added: no photon in 96 passes of 800 light subpaths).
+ * A vertex scattered in a medium is non-specular (connectible) on both sides, and merging happens
+ * on surfaces only, so a path that scatters in a medium next to x_k stays with the strategies
+ * that sample it; segments through media carry their transmittance in both subpaths'
+ * throughputs. Materials are either wholly specular (mirror, glass) or not at all, so a vertex's
+ * delta flag is its material's. */
 #ifndef CLBDPT_CAUSTIC_MERGING_H
 #define CLBDPT_CAUSTIC_MERGING_H
 

@@ -318,7 +318,7 @@ __attribute__((always_inline)) inline int light_subpath_from(const SceneData* sc
 
 /* Light subpath: at most max_depth + 1 vertices (the light and max_depth scattering vertices).
  * With aim (caustic photons alone), its emitted ray is aimed at that sphere
- * (caustic_photon_emission); its densities are then no BDPT strategy's. */
+ * (light_emission_aimed); its densities are then no BDPT strategy's. */
 inline int generate_light_subpath_aimed(const SceneData* scene, Rng* rng, int max_depth, PathVertex* path,
                                         const float4* aim) {
     rng_seek(rng, SAMPLE_DRAW_LIGHT_POSITION);

@@ -882,8 +882,8 @@ int main(int argc, char** argv) {
                        "auto (default): on where --integrator auto chose a BDPT mix; on: with --integrator bdpt too; "
                        "off. Caustics seen through mirrors and glass (paths that only s = 0 samples, or none where a "
                        "point, spot or directional light casts them) are estimated from each pass's caustic photons "
-                       "instead, in scenes with a mirror or glass: "
-                       "biased by a blur of about --merge-radius pixels that shrinks as passes accumulate")
+                       "instead, in scenes with a mirror or glass: biased by a blur of about --merge-radius pixels "
+                       "that shrinks as passes accumulate")
         ->check(CLI::IsMember({"auto", "on", "off"}));
     render->add_option("--merge-radius", args.merge_radius,
                        "Caustic merging's radius in pixel footprints at the scene's centre, for the first pass "

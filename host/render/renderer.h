@@ -55,9 +55,10 @@ struct RenderOptions {
     // counted in RenderStats instead, so a long render survives it (the command line).
     bool drop_non_finite = false;
     // bdpt: caustics seen through mirrors and glass, which only s = 0 samples (none where a
-    // delta light casts them), estimated from each pass's caustic photons instead (cl/caustic_merging.h), where the scene has them
-    // (scene_has_merged_caustics) and strategy images are off; the merge radius in pixel
-    // footprints at the scene's centre (render/caustic_photons.h).
+    // delta light casts them), estimated from each pass's caustic photons instead
+    // (cl/caustic_merging.h), where the scene has them (scene_has_merged_caustics) and strategy
+    // images are off; the merge radius in pixel footprints at the scene's centre
+    // (render/caustic_photons.h).
     bool caustic_merging = false;
     double merge_radius = 1.0;
     // Tests and benchmarks only: the path tracer built as bdpt builds its strategies, from a
