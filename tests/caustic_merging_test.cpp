@@ -62,6 +62,18 @@ TEST(CausticMerging, NothingChangesWithoutSpecularSurfaces) {
     EXPECT_EQ(render_image(scene, merging, 2), render_image(scene, plain, 2));
 }
 
+// A glass material that no triangle uses (exporters' MTL files often define such) is no reason
+// for photons: there is nothing to aim them at.
+TEST(CausticMerging, NothingToMergeWithAnUnusedGlassMaterial) {
+    const std::string path = scene_path("cornell-box");
+    if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " does not exist";
+    Scene loaded = load_scene(path);
+    add_scene_material(loaded, glass_material(1.5f), "unused_glass");
+    const DeviceScene scene = build_device_scene(loaded, kFilm, kFilm);
+    EXPECT_FALSE(scene_has_merged_caustics(scene));
+    EXPECT_EQ(Renderer(test_device(), scene, merging_options(15)).caustic_photons(), nullptr);
+}
+
 // Strategy images record each (s, t) apart, and the photons are none of them: merging stays off.
 TEST(CausticMerging, OffWithStrategyImages) {
     const std::string path = scene_path("cornell-specular");

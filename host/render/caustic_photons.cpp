@@ -34,14 +34,23 @@ constexpr cl_uint kTraceArg = SceneBuffers::kSceneArgCount;
 
 }  // namespace
 
+namespace {
+
+bool is_specular_triangle(const DeviceScene& scene, size_t i) {
+    const int kind = scene.materials[size_t(scene.infos[i].material)].kind;
+    return kind == MATERIAL_MIRROR || kind == MATERIAL_GLASS;
+}
+
+}  // namespace
+
 // The sphere about the box of every mirror and glass triangle (xyz centre, w radius), which the
 // photons' emitted rays are aimed at: a caustic photon's first hit is on one of them. Widened by
 // a thousandth of the scene's radius, so that rounding cannot take a grazing ray out of it.
+// Only for scenes with such a triangle (scene_has_merged_caustics).
 cl_float4 specular_bounding_sphere(const DeviceScene& scene) {
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (size_t i = 0; i < scene.triangles.size(); ++i) {
-        const int kind = scene.materials[size_t(scene.infos[i].material)].kind;
-        if (kind != MATERIAL_MIRROR && kind != MATERIAL_GLASS) continue;
+        if (!is_specular_triangle(scene, i)) continue;
         for (const cl_float4* p : {&scene.triangles[i].p0, &scene.triangles[i].p1, &scene.triangles[i].p2})
             for (int a = 0; a < 3; ++a) {
                 lo[a] = std::min(lo[a], double(p->s[a]));
@@ -59,9 +68,9 @@ cl_float4 specular_bounding_sphere(const DeviceScene& scene) {
 }
 
 bool scene_has_merged_caustics(const DeviceScene& scene) {
-    const bool specular = std::any_of(scene.materials.begin(), scene.materials.end(), [](const Material& m) {
-        return m.kind == MATERIAL_MIRROR || m.kind == MATERIAL_GLASS;
-    });
+    // Triangles, not materials: an MTL file often defines materials that no face uses.
+    bool specular = false;
+    for (size_t i = 0; i < scene.triangles.size() && !specular; ++i) specular = is_specular_triangle(scene, i);
     return specular && !scene.lights.empty();
 }
 

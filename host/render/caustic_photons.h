@@ -20,8 +20,8 @@
 
 namespace clbdpt {
 
-// Whether a scene has paths that caustic merging takes over: a mirror or glass material and a
-// light (of any kind). Media may fill the scene: a medium vertex counts as non-specular on both
+// Whether a scene has paths that caustic merging takes over: a triangle of mirror or glass and
+// a light (of any kind). Media may fill the scene: a medium vertex counts as non-specular on both
 // sides of the split.
 bool scene_has_merged_caustics(const DeviceScene& scene);
 
