@@ -174,6 +174,15 @@ int medium_at(const DeviceScene& ds, int scene_medium, Vec3 p) {
 
 }  // namespace
 
+std::vector<Material> materials_in_use(const DeviceScene& scene) {
+    std::vector<char> used(scene.materials.size(), 0);
+    for (const TriangleInfo& info : scene.infos) used[size_t(info.material)] = 1;
+    std::vector<Material> in_use;
+    for (size_t m = 0; m < used.size(); ++m)
+        if (used[m]) in_use.push_back(scene.materials[m]);
+    return in_use;
+}
+
 DeviceScene build_device_scene(const Scene& scene, int width, int height, EnvironmentSampling env_sampling) {
     DeviceScene ds;
     ds.env_sampling = env_sampling;

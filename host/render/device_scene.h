@@ -54,6 +54,10 @@ struct DeviceScene {
 };
 
 // width/height: the film size actually rendered (scene's, or the command line's overrides).
+// The materials that some triangle uses, in index order: what a scene needs compiled in and what
+// its strategies must serve (an exporter's MTL file often defines materials no face uses).
+std::vector<Material> materials_in_use(const DeviceScene& scene);
+
 DeviceScene build_device_scene(const Scene& scene, int width, int height,
                                EnvironmentSampling env_sampling = EnvironmentSampling::Compensated);
 

@@ -299,7 +299,7 @@ const StrategyCandidate* lt_rival(const std::vector<StrategyCandidate>& candidat
 
 bool light_tracing_is_a_candidate(const DeviceScene& scene) {
     if (!scene.media.empty()) return false;
-    for (const Material& m : scene.materials)
+    for (const Material& m : materials_in_use(scene))
         if (m.kind != MATERIAL_DIFFUSE) return false;
     for (const Light& l : scene.lights)
         if (l.kind == LIGHT_ENVIRONMENT) return false;
@@ -310,7 +310,8 @@ bool delta_light_meets_specular(const DeviceScene& scene) {
     const bool delta_light = std::any_of(scene.lights.begin(), scene.lights.end(), [](const Light& l) {
         return l.kind == LIGHT_POINT || l.kind == LIGHT_SPOT || l.kind == LIGHT_DIRECTIONAL;
     });
-    return delta_light && std::any_of(scene.materials.begin(), scene.materials.end(), [](const Material& m) {
+    const std::vector<Material> used = materials_in_use(scene);
+    return delta_light && std::any_of(used.begin(), used.end(), [](const Material& m) {
                return m.kind == MATERIAL_MIRROR || m.kind == MATERIAL_GLASS;
            });
 }
