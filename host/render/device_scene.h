@@ -54,8 +54,9 @@ struct DeviceScene {
 };
 
 // width/height: the film size actually rendered (scene's, or the command line's overrides).
-// The materials that some triangle uses, in index order: what a scene needs compiled in and what
-// its strategies must serve (an exporter's MTL file often defines materials no face uses).
+// The materials that some triangle uses, in index order: what the strategies must serve (an
+// exporter's MTL file often defines materials no face uses). The kernel's features still come
+// from every material: the MIS tests build kernels for paths whose materials no triangle has.
 std::vector<Material> materials_in_use(const DeviceScene& scene);
 
 DeviceScene build_device_scene(const Scene& scene, int width, int height,

@@ -120,8 +120,7 @@ std::vector<std::string> kernel_defines(const DeviceScene& scene, Integrator int
     }
     bool glossy = false, mirror = false, glass = false, interfaces = false;
     bool media = !scene.media.empty();
-    const std::vector<Material> used = materials_in_use(scene);
-    for (const Material& m : used) {
+    for (const Material& m : scene.materials) {
         glossy |= m.kind == MATERIAL_GLOSSY;
         mirror |= m.kind == MATERIAL_MIRROR;
         glass |= m.kind == MATERIAL_GLASS;
@@ -130,7 +129,7 @@ std::vector<std::string> kernel_defines(const DeviceScene& scene, Integrator int
     media |= interfaces;
     bool textures = !scene.textures.empty();
     bool cutouts = false, bump_maps = false, emission_textures = false;
-    for (const Material& m : used) {
+    for (const Material& m : scene.materials) {
         cutouts |= textures && m.cutout_texture != 0;
         bump_maps |= textures && m.bump_texture != 0;
         emission_textures |= textures && m.ke_texture != 0;
