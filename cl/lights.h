@@ -375,13 +375,19 @@ typedef struct {
     float pdf_dir;
 } EmittedRay;
 
-inline void bounding_disk_point(const SceneData* scene, float3 w_toward_light, float2 u, float3* origin) {
+/* A point of the disk of `radius` about `center` across w_toward_light, moved `back` toward the
+ * light: where an infinite light's emitted rays start. */
+inline float3 disk_point_across(float3 center, float radius, float back, float3 w_toward_light, float2 u) {
     float3 s_axis, t_axis;
     coordinate_system(w_toward_light, &s_axis, &t_axis);
     float2 cd = sample_concentric_disk(u);
+    float3 p_disk = center + radius * (cd.x * s_axis + cd.y * t_axis);
+    return p_disk + back * w_toward_light;
+}
+
+inline void bounding_disk_point(const SceneData* scene, float3 w_toward_light, float2 u, float3* origin) {
     float r = scene_radius(scene);
-    float3 p_disk = scene_center(scene) + r * (cd.x * s_axis + cd.y * t_axis);
-    *origin = p_disk + r * w_toward_light;
+    *origin = disk_point_across(scene_center(scene), r, r, w_toward_light, u);
 }
 
 inline int light_sample_le(const SceneData* scene, int index, float2 u_pos, float2 u_dir, EmittedRay* er) {
@@ -475,12 +481,9 @@ inline int light_emission_aimed(const SceneData* scene, int index, float2 u_pos,
     float3 c = aim.xyz;
     float r = aim.w;
     if (light_is_infinite(light->kind)) {
-        float3 w_light = -er->dir, s_axis, t_axis;
-        coordinate_system(w_light, &s_axis, &t_axis);
-        float2 cd = sample_concentric_disk(u_pos);
         /* Far enough back along the light's direction to be outside the scene's bounding sphere. */
         float back = length(c - scene_center(scene)) + scene_radius(scene) + r;
-        er->origin = c + r * (cd.x * s_axis + cd.y * t_axis) + back * w_light;
+        er->origin = disk_point_across(c, r, back, -er->dir, u_pos);
         er->pdf_pos = 1.0f / (PI_F * r * r);
         return 1;
     }

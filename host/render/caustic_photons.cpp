@@ -68,10 +68,8 @@ cl_float4 specular_bounding_sphere(const DeviceScene& scene) {
 }
 
 bool scene_has_merged_caustics(const DeviceScene& scene) {
-    // Triangles, not materials: an MTL file often defines materials that no face uses.
-    bool specular = false;
-    for (size_t i = 0; i < scene.triangles.size() && !specular; ++i) specular = is_specular_triangle(scene, i);
-    return specular && !scene.lights.empty();
+    // Used materials only: an MTL file often defines materials that no face uses.
+    return has_specular_surfaces(scene) && !scene.lights.empty();
 }
 
 CausticPhotons::CausticPhotons(DeviceContext& device, const cl::Program& program, const SceneBuffers& buffers,

@@ -59,6 +59,9 @@ struct DeviceScene {
 // from every material: the MIS tests build kernels for paths whose materials no triangle has.
 std::vector<Material> materials_in_use(const DeviceScene& scene);
 
+// Whether some triangle is a mirror or glass.
+bool has_specular_surfaces(const DeviceScene& scene);
+
 DeviceScene build_device_scene(const Scene& scene, int width, int height,
                                EnvironmentSampling env_sampling = EnvironmentSampling::Compensated);
 

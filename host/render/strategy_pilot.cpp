@@ -310,10 +310,7 @@ bool delta_light_meets_specular(const DeviceScene& scene) {
     const bool delta_light = std::any_of(scene.lights.begin(), scene.lights.end(), [](const Light& l) {
         return l.kind == LIGHT_POINT || l.kind == LIGHT_SPOT || l.kind == LIGHT_DIRECTIONAL;
     });
-    const std::vector<Material> used = materials_in_use(scene);
-    return delta_light && std::any_of(used.begin(), used.end(), [](const Material& m) {
-               return m.kind == MATERIAL_MIRROR || m.kind == MATERIAL_GLASS;
-           });
+    return delta_light && has_specular_surfaces(scene);
 }
 
 std::string path_tracing_shortfall(const DeviceScene& scene) {
