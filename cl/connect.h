@@ -48,11 +48,12 @@ inline int connection_light_samples(const SceneData* scene, int s, int t) {
 }
 
 /* nee_group: for s = 1 with NEE_EVERY_LIGHT, which light group to sample (else unused).
+ * light_s1_scale: light_subpath_s1_scale of light_path (cl/mis.h).
  * outer_share: null, or where the MIS's share of the outer strategies goes (cl/mis.h; set
  * where the contribution is not black). */
 inline float3 connect_bdpt(const SceneData* scene, const StrategyMix* mix, Rng* rng, const PathVertex* light_path,
-                           const PathVertex* camera_path, int s, int t, int nee_group, float2* raster, float* weight,
-                           float* outer_share) {
+                           const PathVertex* camera_path, int s, int t, int nee_group, float light_s1_scale,
+                           float2* raster, float* weight, float* outer_share) {
     float3 L = (float3)(0.0f);
     PathVertex sampled;
     float to_qs = 1.0f, to_pt = 1.0f;
@@ -116,7 +117,7 @@ inline float3 connect_bdpt(const SceneData* scene, const StrategyMix* mix, Rng* 
     }
     if (is_black(L)) return L;
     *weight = mis_weight_and_outer_share(scene, mix, light_path, camera_path, &sampled, s, t, to_qs, to_pt,
-                                         outer_share);
+                                         light_s1_scale, outer_share);
     return L;
 }
 

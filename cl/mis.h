@@ -66,13 +66,21 @@ inline void mis_fill_camera_tails(const StrategyMix* mix, PathVertex* path, int 
 #endif
 }
 
-inline void mis_fill_light_tails(const SceneData* scene, const StrategyMix* mix, PathVertex* path, int n) {
+/* The ratio by which light samples (NEE_OWN_SELECTION) take the light of a light subpath of n
+ * vertices, from its second vertex, over select_pdf (light_sample_selection_ratio): the s = 1
+ * term's scale in every connection with s >= 2 of that subpath, so computed once per subpath.
+ * 1 where light samples choose by select_pdf or the subpath has no second vertex. */
+inline float light_subpath_s1_scale(const SceneData* scene, const PathVertex* path, int n) {
+#if defined(NEE_OWN_SELECTION)
+    if (n >= 2) return light_sample_selection_ratio(scene, path[0].light, path[1].p);
+#endif
+    return 1.0f;
+}
+
+inline void mis_fill_light_tails(const SceneData* scene, const StrategyMix* mix, PathVertex* path, int n,
+                                 float s1_scale) {
 #if STRATEGIES_READ_SUBPATH_PDF_REV
     float inner = mix->inner_connections ? mix->light_subpaths : 0.0f;
-    float s1_scale = 1.0f;
-#if defined(NEE_OWN_SELECTION)
-    if (n >= 2) s1_scale = light_sample_selection_ratio(scene, path[0].light, path[1].p);
-#endif
     float tail = 0.0f;
     for (int k = 0; k + 1 < n; ++k) {
         int delta_light_vertex = k > 0 ? path[k - 1].delta : vertex_is_delta_light(scene, &path[0]);
@@ -91,6 +99,7 @@ inline void mis_fill_light_tails(const SceneData* scene, const StrategyMix* mix,
  * s = 1), ignored otherwise.
  * to_qs, to_pt: with media, the distance-sampling densities of the connecting segment toward
  * its light-side and camera-side ends (cl/medium.h; 1 in vacuum, ignored for s = 0).
+ * light_s1_scale: light_subpath_s1_scale of the light subpath (read for s >= 2 only).
  * outer_share: null, or where to store the sum of the weights of the mix's outer strategies
  * (s <= 1 or t = 1, those of a mix without inner connections) for the same path: the share
  * of it that such a mix would take on (host/render/strategy_pilot.h, subset moments). It
@@ -98,7 +107,7 @@ inline void mis_fill_light_tails(const SceneData* scene, const StrategyMix* mix,
 inline float mis_weight_and_outer_share(const SceneData* scene, const StrategyMix* mix,
                                         const PathVertex* light_path, const PathVertex* camera_path,
                                         const PathVertex* sampled, int s, int t, float to_qs, float to_pt,
-                                        float* outer_share) {
+                                        float light_s1_scale, float* outer_share) {
     /* The connection's endpoints: t = 1 replaces the camera vertex and (otherwise) s = 1 the
      * light vertex with the freshly sampled one; the subpath arrays are not read there (a path
      * tracer has no light subpath at all). */
@@ -119,8 +128,10 @@ inline float mis_weight_and_outer_share(const SceneData* scene, const StrategyMi
 #if defined(NEE_OWN_SELECTION) && INTEGRATOR != INTEGRATOR_LT /* a light tracer has no s = 1, t >= 2 */
     if (s + t >= 3) {
         /* the vertex a light sample would be taken from: the path's second from the light */
-        const PathVertex* sample_from = s == 0 ? pt_minus : (s == 1 ? pt : &light_path[1]);
-        s1_scale = light_sample_selection_ratio(scene, emitter->light, sample_from->p);
+        if (s >= 2)
+            s1_scale = light_s1_scale;
+        else
+            s1_scale = light_sample_selection_ratio(scene, emitter->light, (s == 0 ? pt_minus : pt)->p);
     }
 #endif
 
@@ -220,7 +231,8 @@ inline float mis_weight_and_outer_share(const SceneData* scene, const StrategyMi
 inline float mis_weight(const SceneData* scene, const StrategyMix* mix, const PathVertex* light_path,
                         const PathVertex* camera_path, const PathVertex* sampled, int s, int t, float to_qs,
                         float to_pt) {
-    return mis_weight_and_outer_share(scene, mix, light_path, camera_path, sampled, s, t, to_qs, to_pt, 0);
+    return mis_weight_and_outer_share(scene, mix, light_path, camera_path, sampled, s, t, to_qs, to_pt,
+                                      light_subpath_s1_scale(scene, light_path, s), 0);
 }
 
 #endif

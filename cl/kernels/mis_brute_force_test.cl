@@ -71,7 +71,7 @@ __kernel void mis_weight_test(SCENE_KERNEL_ARGS, __global const TestVertex* vert
     PathVertex light_path[TEST_MAX_VERTICES], camera_path[TEST_MAX_VERTICES];
     for (int j = 0; j < c.s; ++j) light_path[j] = path_vertex(&vertices[c.light_offset + j]);
     for (int j = 0; j < c.t; ++j) camera_path[j] = path_vertex(&vertices[c.camera_offset + j]);
-    mis_fill_light_tails(&scene, &mix, light_path, c.s);
+    mis_fill_light_tails(&scene, &mix, light_path, c.s, light_subpath_s1_scale(&scene, light_path, c.s));
     mis_fill_camera_tails(&mix, camera_path, c.t);
     PathVertex sampled;
     if (c.t == 1) {

@@ -81,7 +81,7 @@ __kernel void mis_weight_sums(SCENE_KERNEL_ARGS, RenderParams params, __global f
             /* A light that never emits toward x_{k-1} from x_k (an environment map's texel at or
              * below its mean, render/device_scene.h) leaves the path to s = 0. */
             if (s > 0 && light_path[0].pdf_fwd == 0.0f) continue;
-            mis_fill_light_tails(&scene, &mix, light_path, s);
+            mis_fill_light_tails(&scene, &mix, light_path, s, light_subpath_s1_scale(&scene, light_path, s));
             /* The connection joins x_{t-1} and x_t along the walk's own segment. */
             float to_qs = 1.0f, to_pt = 1.0f;
 #ifdef HAS_MEDIA

@@ -111,6 +111,7 @@ __kernel void render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, __global float
 #if INTEGRATOR == INTEGRATOR_PT
     int n_light = 0; /* s = 0 and s = 1 only; light_path is never read */
     int light_is_area = 0;
+    float light_s1_scale = 1.0f;
 #else
     /* A fraction of light subpaths per pixel sample is a probability (cl/strategies.h). */
     int n_light = 0;
@@ -119,7 +120,8 @@ __kernel void render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, __global float
         n_light = generate_light_subpath(&scene, &rng, MAX_DEPTH, light_path);
     int light_is_area = n_light > 0 && lights[light_path[0].light].kind == LIGHT_AREA;
     mis_fill_camera_tails(&mix, camera_path, n_camera);
-    mis_fill_light_tails(&scene, &mix, light_path, n_light);
+    float light_s1_scale = light_subpath_s1_scale(&scene, light_path, n_light);
+    mis_fill_light_tails(&scene, &mix, light_path, n_light, light_s1_scale);
 #endif
 
     __global SplatRecord* my_splats = splats + (size_t)gid * SPLAT_SLOTS;
@@ -161,7 +163,7 @@ __kernel void render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, __global float
             for (int g = 0; g < light_samples; ++g) {
                 float2 splat_raster;
                 float weight;
-                float3 unweighted = connect_bdpt(&scene, &mix, &rng, light_path, camera_path, s, t, g,
+                float3 unweighted = connect_bdpt(&scene, &mix, &rng, light_path, camera_path, s, t, g, light_s1_scale,
                                                  &splat_raster, &weight, params.subset_moments ? &outer_share : 0);
 #ifdef DEBUG_NAN_PIXEL
                 /* Every strategy the sample tries, whether or not its connection carries light. */
