@@ -68,6 +68,31 @@ inline float acos_half_turns(float c) {
     return c < 0.0f ? 1.0f - half_turns : half_turns;
 }
 
+/* ln x for a normal float x > 0 (not for 0, denormals, infinities or NaN), within 0.83 ulp
+ * (measured over every float in [2^-24, 1], with and without fused multiply-adds): Cephes' logf
+ * polynomial on the mantissa reduced to [sqrt(1/2), sqrt(2)). PoCL's log (SLEEF's logf_u10)
+ * took 118 instructions a call on haswell, 6.5% of a path-traced sample in fog, where every
+ * segment draws its optical depth with one. */
+inline float log_of_normal(float x) {
+    /* x = 2^e m with m in [sqrt(1/2), sqrt(2)): the exponent counted from sqrt(1/2)'s bits. */
+    int e = (int)(as_uint(x) - 0x3f3504f3u) >> 23;
+    float f = as_float(as_uint(x) - ((uint)e << 23)) - 1.0f;
+    float z = f * f;
+    float p = 7.0376836292e-2f;
+    p = p * f - 1.1514610310e-1f;
+    p = p * f + 1.1676998740e-1f;
+    p = p * f - 1.2420140846e-1f;
+    p = p * f + 1.4249322787e-1f;
+    p = p * f - 1.6668057665e-1f;
+    p = p * f + 2.0000714765e-1f;
+    p = p * f - 2.4999993993e-1f;
+    p = p * f + 3.3333331174e-1f;
+    float fe = (float)e;
+    /* ln 2 split in two (0.693359375 is exact in 9 bits) so that e ln 2 adds without error */
+    float y = f * z * p + fe * -2.12194440e-4f - 0.5f * z;
+    return (f + y) + fe * 0.693359375f;
+}
+
 inline float3 xyz(float4 v) { return (float3)(v.x, v.y, v.z); }
 
 inline float luminance(float3 c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }

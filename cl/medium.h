@@ -183,7 +183,7 @@ inline SegmentTally segment_tally_begin(void) {
 inline int trace_through_media(const SceneData* scene, const Rng* rng, uint stream, float3* o, float3 d, int* medium,
                                float2 u, Hit* hit, SegmentTally* tally) {
     int channel = min((int)(u.x * 3.0f), 2);
-    float tau = -log(1.0f - u.y);
+    float tau = sample_unit_exponential(u.y);
     *tally = segment_tally_begin();
     for (int crossing = 0; crossing <= MEDIUM_MAX_CROSSINGS; ++crossing) {
         int found = intersect(scene->nodes, scene->triangles, &scene->cutouts, *o, d, INFINITY, hit);
@@ -210,7 +210,7 @@ inline int trace_through_media(const SceneData* scene, const Rng* rng, uint stre
                         return SEGMENT_MEDIUM;
                     }
                     tally->weight *= ((float3)(majorant) - sigma_t) * (1.0f / majorant);
-                    tau = -log(1.0f - rng_stream_value(rng, stream, k + 1u));
+                    tau = sample_unit_exponential(rng_stream_value(rng, stream, k + 1u));
                 }
                 tau -= majorant * (t1 - t); /* the depth left over for the media beyond */
             }
@@ -297,7 +297,7 @@ inline float3 vertices_transmittance(const SceneData* scene, const Rng* rng, uin
                     /* Every draw is counted, the one that overshoots the piece too: the next
                      * piece must not reuse it (it is no longer uniform, knowing it overshot). */
                     if (++tally.events > MEDIUM_MAX_EVENTS) return (float3)(0.0f);
-                    t -= log(1.0f - rng_stream_value(rng, stream, tally.events)) / majorant;
+                    t += sample_unit_exponential(rng_stream_value(rng, stream, tally.events)) / majorant;
                     if (!(t < t1)) break;
                     float3 sigma_t = medium_sigma_t_at(scene, medium, o + dn * t);
                     tally.weight *= ((float3)(majorant) - sigma_t) * (1.0f / majorant);

@@ -16,6 +16,10 @@ inline float2 sample_concentric_disk(float2 u) {
     return o.y * (float2)(cs.y, cs.x);
 }
 
+/* A draw of the exponential distribution of rate 1: -ln(1 - u) for u in [0, 1). 1 - u is at
+ * least 2^-24 for the renderer's draws (24 bits), a normal float, and 1 for u = 0 (depth 0). */
+inline float sample_unit_exponential(float u) { return -log_of_normal(1.0f - u); }
+
 /* Cosine-weighted direction about +z; density cos(theta) / pi. */
 inline float3 sample_cosine_hemisphere(float2 u) {
     float2 d = sample_concentric_disk(u);

@@ -6,6 +6,10 @@
 // a few ulps); densities equal the closed forms to 1e-5 relative (one or two float operations).
 #include <gtest/gtest.h>
 
+#include <cstdint>
+#include <cstring>
+#include <limits>
+
 #include "kernel_test_util.h"
 
 namespace clbdpt::test {
@@ -127,6 +131,51 @@ TEST(Sampling, InverseTrigMatchesDoublePrecision) {
     }
     EXPECT_LE(worst_atan2, 2e-7) << "worst |error| of atan2_turns";
     EXPECT_LE(worst_acos, 2e-7) << "worst |error| of acos_half_turns";
+}
+
+// log_of_normal (cl/geometry.h), the optical depths' logarithm, against double precision over
+// the normal floats: every 4096th bit pattern from the smallest normal to the largest float,
+// plus 1, the floats next to 1 and to sqrt(1/2) (where the mantissa's reduction switches
+// exponent) and 2^-24 (the least 1 - u of a 24-bit draw); and sample_unit_exponential at the
+// draws' ends. Measured worst relative error 8.1e-8 over every normal float (a host copy of the
+// function); the bound 1.5e-7 is under 1.3 ulp (a wrong exponent errs by ln 2, a wrong
+// coefficient by 1e-5 or more).
+TEST(Sampling, LogOfNormalMatchesDoublePrecision) {
+    std::vector<float> x;
+    auto from_bits = [](uint32_t b) {
+        float f;
+        std::memcpy(&f, &b, sizeof f);
+        return f;
+    };
+    for (uint64_t b = 0x00800000u; b <= 0x7f7fffffu; b += 4096) x.push_back(from_bits(uint32_t(b)));
+    const float root_half = float(std::sqrt(0.5));
+    for (float v : {1.0f, std::nextafter(1.0f, 0.0f), std::nextafter(1.0f, 2.0f), root_half,
+                    std::nextafter(root_half, 0.0f), std::nextafter(root_half, 1.0f), std::ldexp(1.0f, -24),
+                    std::numeric_limits<float>::min(), std::numeric_limits<float>::max()})
+        x.push_back(v);
+    const float last_draw = 1.0f - std::ldexp(1.0f, -24);
+    std::vector<float> u(x.size(), 0.5f);
+    u[0] = 0.0f;
+    u[1] = last_draw;
+    cl::Kernel k = test_kernel("kernels/sampling_test.cl", {}, "log_test");
+    cl::Buffer xb = upload(x), ub = upload(u);
+    cl::Buffer out = output_buffer<cl_float2>(x.size());
+    k.setArg(0, xb);
+    k.setArg(1, ub);
+    k.setArg(2, out);
+    launch(k, x.size());
+    std::vector<cl_float2> r = download<cl_float2>(out, x.size());
+    double worst = 0;
+    float worst_x = 0;
+    for (size_t i = 0; i < x.size(); ++i) {
+        const double expected = std::log(double(x[i]));
+        const double e = expected == 0 ? std::abs(double(r[i].s[0])) : std::abs(r[i].s[0] - expected) / std::abs(expected);
+        if (e > worst) worst = e, worst_x = x[i];
+    }
+    EXPECT_LE(worst, 1.5e-7) << "worst relative error of log_of_normal, at x = " << worst_x;
+    EXPECT_EQ(r[0].s[1], 0.0f) << "sample_unit_exponential(0)";
+    EXPECT_NEAR(r[1].s[1], 24 * std::log(2.0), 24 * std::log(2.0) * 1.5e-7) << "sample_unit_exponential(1 - 2^-24)";
+    EXPECT_NEAR(r[2].s[1], std::log(2.0), std::log(2.0) * 1.5e-7) << "sample_unit_exponential(1/2)";
 }
 
 // Concentric disk: area-preserving, so r^2 and phi are uniform.

@@ -59,3 +59,9 @@ __kernel void inverse_trig_test(__global const float4* in, __global float2* out)
     float4 v = in[gid];
     out[gid] = (float2)(atan2_turns(v.y, v.x), acos_half_turns(v.z));
 }
+
+/* out[i] = (log_of_normal(x[i]), sample_unit_exponential(u[i])). */
+__kernel void log_test(__global const float* x, __global const float* u, __global float2* out) {
+    int gid = get_global_id(0);
+    out[gid] = (float2)(log_of_normal(x[gid]), sample_unit_exponential(u[gid]));
+}
