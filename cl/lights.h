@@ -16,11 +16,24 @@
 
 /* ---- Selection ------------------------------------------------------------------------- */
 
+/* The interval of the light CDF holding u, among its first n (n <= light_count). With many
+ * lights (LIGHT_CDF_GUIDE, host/render/features.h) through the CDF's guide (cl/scene.h), which
+ * covers all light_count intervals: the answer among the first n is the nearer of its answer
+ * and the n-th (the CDF does not decrease). */
+inline int light_cdf_interval(const SceneData* scene, int n, float u) {
+#ifdef LIGHT_CDF_GUIDE
+    int count = scene->info->light_count;
+    return min(find_interval_guided(scene->light_cdf, count, scene->light_cdf + count + 1, count, u), n - 1);
+#else
+    return find_interval(scene->light_cdf, n, u);
+#endif
+}
+
 /* The light that draw u picks by power, its probability, and u's rest for sampling a point on
  * it (rest_of_choice). */
 inline int sample_light_index(const SceneData* scene, float u, float* select_pdf, float* u_rest) {
     __global const float* cdf = scene->light_cdf;
-    int i = find_interval(cdf, scene->info->light_count, u);
+    int i = light_cdf_interval(scene, scene->info->light_count, u);
     *select_pdf = scene->lights[i].select_pdf;
     *u_rest = rest_of_choice(u, cdf[i], cdf[i + 1]);
     return i;
@@ -180,7 +193,7 @@ inline int nee_group_light(const SceneData* scene, int g, float3 x, float u_ligh
         __global const float* cdf = scene->light_cdf;
         float area_total = cdf[area];
         float target = u_light * area_total;
-        i = area_total > 0.0f ? find_interval(cdf, area, target) : 0;
+        i = area_total > 0.0f ? light_cdf_interval(scene, area, target) : 0;
         *u_rest = rest_of_choice(target, cdf[i], cdf[i + 1]);
     } else {
         i = area + g - (area > 0 ? 1 : 0);

@@ -83,6 +83,25 @@ inline int find_interval(__global const float* cdf, int n, float u) {
     return lo;
 }
 
+/* find_interval(cdf, n, u) by a guide table (Chen's indexed search, 1974): guide[k], for
+ * k = 0 .. g, is the interval holding k / g, so the interval holding u lies from guide[k] to
+ * guide[k + 1] for k = floor(u g), a range of about n / g intervals, where the plain search
+ * halves [0, n) log2(n) times (veach-mis's 5 472 triangle lights: 13 steps, 5% of a path-traced
+ * sample). The range's ends are checked against u, so a guide entry off by the rounding of
+ * u g costs steps, never a different answer. The guide's ints are stored as float bits: it
+ * follows its CDF in one buffer. */
+inline int find_interval_guided(__global const float* cdf, int n, __global const float* guide, int g, float u) {
+    int k = clamp((int)(u * (float)g), 0, g - 1);
+    int lo = as_int(guide[k]), hi = min(as_int(guide[k + 1]) + 1, n); /* cdf[lo] <= u < cdf[hi] */
+    if (cdf[lo] > u) lo = 0;
+    if (hi < n && cdf[hi] <= u) hi = n;
+    while (hi - lo > 1) {
+        int mid = (lo + hi) >> 1;
+        if (cdf[mid] <= u) lo = mid; else hi = mid;
+    }
+    return lo;
+}
+
 /* Where u lies within [lo, hi), itself uniform on [0, 1) when u is uniform and falls there: a
  * discrete choice made with u (one light of several, one triangle of an emitter) hands its rest
  * to the chosen item's own sampling, so the points of a stratified 2D draw stay stratified over

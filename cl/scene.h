@@ -14,7 +14,8 @@ typedef struct {
     __global const TriangleNormals* normals;
     __global const Material* materials;
     __global const Light* lights;
-    __global const float* light_cdf;        /* light_count + 1 entries, selection by power */
+    __global const float* light_cdf;        /* light_count + 1 entries, selection by power, then
+                                               their guide's light_count + 1 (find_interval_guided) */
     __global const float4* env_texels;      /* lat-long map, env_width * env_height, row 0 = +y */
     __global const float* env_distribution; /* see lights.h, "Environment map distribution" */
     __global const TriangleUV* uvs;         /* per triangle, in scenes with textures */

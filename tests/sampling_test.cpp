@@ -9,8 +9,10 @@
 #include <cstdint>
 #include <cstring>
 #include <limits>
+#include <random>
 
 #include "kernel_test_util.h"
+#include "render/device_scene.h"
 
 namespace clbdpt::test {
 namespace {
@@ -334,6 +336,74 @@ TEST(Sampling, FindIntervalNeverReturnsEmptyIntervals) {
         EXPECT_LT(u[i], cdf[j + 1]) << "u " << u[i];
         EXPECT_GT(weights[j], 0) << "u " << u[i] << " gave the empty interval " << j;
     }
+}
+
+// find_interval_guided (cl/sampling.h) answers exactly what find_interval does, so the light
+// CDF's guide (LIGHT_CDF_GUIDE) leaves every image as it was: CDFs of 1 to 5 000 intervals with
+// runs of zero weights and one weight a million times the rest (guide entries far apart),
+// queried at every CDF value and its float neighbours, at every k / g and its neighbours and on
+// a grid; each with the guide append_cdf_guide builds, and with guides whose entries are wrong
+// (all 0, all n - 1, reversed), which may cost steps but must not change an answer.
+TEST(Sampling, GuidedSearchAnswersAsThePlainSearch) {
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> weight(0.0f, 1.0f);
+    cl::Kernel k = test_kernel("kernels/sampling_test.cl", {}, "find_interval_guided_test");
+    int checked = 0;
+    for (int n : {1, 2, 17, 300, 5000}) {
+        for (int variant = 0; variant < 4; ++variant) {
+            std::vector<float> weights(static_cast<size_t>(n));
+            for (int i = 0; i < n; ++i) weights[size_t(i)] = (i / 3) % 4 == 1 ? 0.0f : weight(rng);
+            if (n > 2) weights[size_t(n / 2)] = 1e6f;
+            std::vector<float> buffer(size_t(n) + 1, 0.0f);
+            double total = 0, run = 0;
+            for (float w : weights) total += w;
+            for (int i = 0; i < n; ++i) {
+                run += weights[size_t(i)];
+                buffer[size_t(i) + 1] = total > 0 ? float(run / total) : float(i + 1) / float(n);
+            }
+            buffer.back() = 1.0f;
+            const std::vector<float> cdf = buffer;
+            const int g = n;
+            append_cdf_guide(buffer, 0, n, g);
+            std::vector<float> guide(buffer.begin() + n + 1, buffer.end());
+            ASSERT_EQ(guide.size(), size_t(g) + 1);
+            auto set_all = [&](auto entry_of) {
+                for (int j = 0; j <= g; ++j) {
+                    const int32_t e = entry_of(j);
+                    std::memcpy(&guide[size_t(j)], &e, sizeof e);
+                }
+            };
+            if (variant == 1) set_all([](int) { return 0; });
+            if (variant == 2) set_all([&](int) { return n - 1; });
+            if (variant == 3) set_all([&](int j) { return std::max(0, n - 1 - j); });
+            std::vector<float> u;
+            for (float c : cdf) {
+                for (float v : {c, std::nextafter(c, 0.0f), std::nextafter(c, 1.0f)})
+                    if (v >= 0 && v < 1) u.push_back(v);
+            }
+            for (int j = 0; j <= g; ++j) {
+                const float c = float(double(j) / double(g));
+                for (float v : {c, std::nextafter(c, 0.0f), std::nextafter(c, 1.0f)})
+                    if (v >= 0 && v < 1) u.push_back(v);
+            }
+            for (int j = 0; j < 4096; ++j) u.push_back(float(j) / 4096.0f);
+            cl::Buffer cdf_buf = upload(cdf), guide_buf = upload(guide), u_buf = upload(u);
+            cl::Buffer out = output_buffer<cl_int2>(u.size());
+            k.setArg(0, cdf_buf);
+            k.setArg(1, cl_int(n));
+            k.setArg(2, guide_buf);
+            k.setArg(3, cl_int(g));
+            k.setArg(4, u_buf);
+            k.setArg(5, out);
+            launch(k, u.size());
+            std::vector<cl_int2> r = download<cl_int2>(out, u.size());
+            for (size_t i = 0; i < u.size(); ++i) {
+                ASSERT_EQ(r[i].s[1], r[i].s[0]) << "n " << n << ", guide variant " << variant << ", u " << u[i];
+                ++checked;
+            }
+        }
+    }
+    EXPECT_GT(checked, 40000);
 }
 
 }  // namespace

@@ -65,3 +65,10 @@ __kernel void log_test(__global const float* x, __global const float* u, __globa
     int gid = get_global_id(0);
     out[gid] = (float2)(log_of_normal(x[gid]), sample_unit_exponential(u[gid]));
 }
+
+/* out[i] = (find_interval(cdf, n, u[i]), find_interval_guided(cdf, n, guide, g, u[i])). */
+__kernel void find_interval_guided_test(__global const float* cdf, int n, __global const float* guide, int g,
+                                        __global const float* u, __global int2* out) {
+    int gid = get_global_id(0);
+    out[gid] = (int2)(find_interval(cdf, n, u[gid]), find_interval_guided(cdf, n, guide, g, u[gid]));
+}

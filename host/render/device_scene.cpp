@@ -93,6 +93,17 @@ float texture_mean_luminance(const Scene& scene, int texture) {
 
 }  // namespace
 
+void append_cdf_guide(std::vector<float>& buffer, size_t cdf_offset, int n, int g) {
+    std::vector<float> guide(size_t(g) + 1);
+    const float* cdf = buffer.data() + cdf_offset;
+    for (int k = 0; k <= g; ++k) {
+        const float u = g > 0 ? float(double(k) / double(g)) : 0.0f;
+        const int32_t i = n > 0 ? int32_t(std::upper_bound(cdf, cdf + n, u) - cdf) - 1 : 0;
+        std::memcpy(&guide[size_t(k)], &i, sizeof i);
+    }
+    buffer.insert(buffer.end(), guide.begin(), guide.end());
+}
+
 Camera make_camera(const CameraDesc& desc, int width, int height) {
     Camera c{};
     Vec3 forward = normalize(desc.target - desc.eye);
@@ -347,6 +358,7 @@ DeviceScene build_device_scene(const Scene& scene, int width, int height, Enviro
                                                     : ds.lights[i].select_pdf;
         }
     }
+    append_cdf_guide(ds.light_cdf, 0, int(ds.lights.size()), int(ds.lights.size()));
     if (scene.environment_map.width > 0) {
         const EnvironmentMap& map = scene.environment_map;
         ds.env_texels.resize(size_t(map.width) * map.height);

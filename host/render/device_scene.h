@@ -35,7 +35,7 @@ struct DeviceScene {
     std::vector<TriangleNormals> normals;
     std::vector<Material> materials;
     std::vector<Light> lights;
-    std::vector<float> light_cdf;         // lights.size() + 1 entries
+    std::vector<float> light_cdf;         // lights.size() + 1 entries, then their guide's (cl/sampling.h)
     std::vector<float> light_power;       // per light: luminance of its emitted power (host only)
     std::vector<cl_float4> env_texels;    // env map, row 0 = +y
     std::vector<float> env_distribution;  // see cl/lights.h
@@ -72,6 +72,11 @@ Vec3 vec3_of(const cl_float4& v);
 
 // Writes each triangle's unit geometric normal into its corners' w lanes (cl/shared/types.h).
 void store_triangle_normals(std::vector<Triangle>& triangles);
+
+// Appends to `buffer` the guide of the CDF of n intervals at buffer[cdf_offset ..], as
+// find_interval_guided (cl/sampling.h) reads it: g + 1 entries, entry k the interval holding
+// k / g (the last interval whose CDF value is at most k / g), ints stored as float bits.
+void append_cdf_guide(std::vector<float>& buffer, size_t cdf_offset, int n, int g);
 
 // Sampling distribution of a lat-long map (layout in cl/lights.h).
 std::vector<float> environment_distribution(const EnvironmentMap& map, EnvironmentSampling how);

@@ -164,6 +164,7 @@ std::vector<std::string> kernel_defines(const DeviceScene& scene, Integrator int
                                  : light_sampling == LightSampling::Every && groups >= 1;
     if (every_light) d.push_back("NEE_EVERY_LIGHT");
     else if (spot && scene.lights.size() <= kConeAwareMaxLights) d.push_back("NEE_CONE_AWARE");
+    if (scene.lights.size() >= kLightCdfGuideMinLights) d.push_back("LIGHT_CDF_GUIDE");
     // The map's code reads buffers that exist only with a map; "all features" keeps it off
     // unless the scene has one.
     if (env_map) d.push_back("HAS_ENVIRONMENT_MAP");

@@ -57,6 +57,12 @@ constexpr size_t kConeAwareMaxLights = 8;
 // cl/lights.h): one shadow ray per group.
 constexpr int kEveryLightMaxGroups = 8;
 
+// Scenes with more lights than this search the light CDF through its guide (LIGHT_CDF_GUIDE,
+// find_interval_guided in cl/sampling.h); with fewer, a step or two of the plain search costs
+// less than the guide's code (1% more instructions on point-spot's pt, whose area group is
+// empty, and on the Cornell box's).
+constexpr size_t kLightCdfGuideMinLights = 17;
+
 // How light samples (s = 1) choose their lights (cl/lights.h): auto by the rule of
 // kernel_defines, a sample of every light group (NEE_EVERY_LIGHT), or one light per sample.
 enum class LightSampling { Auto = 0, Every = 1, One = 2 };
