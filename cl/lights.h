@@ -234,6 +234,8 @@ inline float light_sample_selection_ratio(const SceneData* scene, int i, float3 
  *   cond_cdf  [H*(W+1)]   per-row CDFs over u
  *   marg_cdf  [H+1]       CDF over rows
  *   integral  [1]         mean of func = its integral over the unit square
+ *   marg_guide [H+1]      the guide of marg_cdf (find_interval_guided, cl/sampling.h)
+ *   cond_guide [H*(W+1)]  per row, the guide of its CDF
  * Directions: theta from +y (v = theta / pi), phi from +x toward +z (u = phi / 2 pi). */
 
 inline float3 env_direction(float2 uv) {
@@ -286,10 +288,12 @@ inline float3 environment_sample_direction(const SceneData* scene, float2 u, flo
     __global const float* cond = func + width * height;
     __global const float* marg = cond + height * (width + 1);
     float integral = marg[height + 1];
-    int y = find_interval(marg, height, u.y);
+    __global const float* marg_guide = marg + height + 2;
+    __global const float* cond_guide = marg_guide + height + 1;
+    int y = find_interval_guided(marg, height, marg_guide, height, u.y);
     float dv = (u.y - marg[y]) / (marg[y + 1] - marg[y]);
     __global const float* row = cond + y * (width + 1);
-    int x = find_interval(row, width, u.x);
+    int x = find_interval_guided(row, width, cond_guide + y * (width + 1), width, u.x);
     float du = (u.x - row[x]) / (row[x + 1] - row[x]);
     float2 uv = (float2)(((float)x + du) / (float)width, ((float)y + dv) / (float)height);
     float sin_theta = unit_circle_turns(0.5f * uv.y).y;

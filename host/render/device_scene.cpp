@@ -172,6 +172,11 @@ std::vector<float> environment_distribution(const EnvironmentMap& map, Environme
     }
     float integral = build_cdf(row_integrals, marg) / float(h);
     marg[h + 1] = integral;
+    // The CDFs' guides (cl/sampling.h), one entry per interval and one more.
+    const size_t cond_offset = size_t(w) * h, marg_offset = cond_offset + size_t(h) * (w + 1);
+    d.reserve(d.size() + size_t(h + 1) + size_t(h) * (w + 1));
+    append_cdf_guide(d, marg_offset, h, h);
+    for (int y = 0; y < h; ++y) append_cdf_guide(d, cond_offset + size_t(y) * (w + 1), w, w);
     return d;
 }
 
