@@ -72,16 +72,19 @@ inline float2 sample_uniform_triangle(float2 u) {
     return (float2)(b0, b1);
 }
 
-/* Index i with cdf[i] <= u < cdf[i + 1] in a normalised CDF of n + 1 entries (cdf[0] = 0,
- * cdf[n] = 1); entries of zero width are never returned for u in [0, 1). */
-inline int find_interval(__global const float* cdf, int n, float u) {
-    int lo = 0, hi = n; /* invariant: cdf[lo] <= u < cdf[hi] */
+/* The binary search of find_interval within [lo, hi), given cdf[lo] <= u and either
+ * u < cdf[hi] or hi = n. */
+inline int find_interval_between(__global const float* cdf, int lo, int hi, float u) {
     while (hi - lo > 1) {
         int mid = (lo + hi) >> 1;
         if (cdf[mid] <= u) lo = mid; else hi = mid;
     }
     return lo;
 }
+
+/* Index i with cdf[i] <= u < cdf[i + 1] in a normalised CDF of n + 1 entries (cdf[0] = 0,
+ * cdf[n] = 1); entries of zero width are never returned for u in [0, 1). */
+inline int find_interval(__global const float* cdf, int n, float u) { return find_interval_between(cdf, 0, n, u); }
 
 /* find_interval(cdf, n, u) by a guide table (Chen's indexed search, 1974): guide[k], for
  * k = 0 .. g, is the interval holding k / g, so the interval holding u lies from guide[k] to
@@ -92,14 +95,10 @@ inline int find_interval(__global const float* cdf, int n, float u) {
  * follows its CDF in one buffer. */
 inline int find_interval_guided(__global const float* cdf, int n, __global const float* guide, int g, float u) {
     int k = clamp((int)(u * (float)g), 0, g - 1);
-    int lo = as_int(guide[k]), hi = min(as_int(guide[k + 1]) + 1, n); /* cdf[lo] <= u < cdf[hi] */
+    int lo = as_int(guide[k]), hi = min(as_int(guide[k + 1]) + 1, n);
     if (cdf[lo] > u) lo = 0;
     if (hi < n && cdf[hi] <= u) hi = n;
-    while (hi - lo > 1) {
-        int mid = (lo + hi) >> 1;
-        if (cdf[mid] <= u) lo = mid; else hi = mid;
-    }
-    return lo;
+    return find_interval_between(cdf, lo, hi, u);
 }
 
 /* Where u lies within [lo, hi), itself uniform on [0, 1) when u is uniform and falls there: a
