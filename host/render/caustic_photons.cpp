@@ -34,15 +34,6 @@ constexpr cl_uint kTraceArg = SceneBuffers::kSceneArgCount;
 
 }  // namespace
 
-namespace {
-
-bool is_specular_triangle(const DeviceScene& scene, size_t i) {
-    const int kind = scene.materials[size_t(scene.infos[i].material)].kind;
-    return kind == MATERIAL_MIRROR || kind == MATERIAL_GLASS;
-}
-
-}  // namespace
-
 // The sphere about the box of every mirror and glass triangle (xyz centre, w radius), which the
 // photons' emitted rays are aimed at: a caustic photon's first hit is on one of them. Widened by
 // a thousandth of the scene's radius, so that rounding cannot take a grazing ray out of it.
@@ -50,7 +41,7 @@ bool is_specular_triangle(const DeviceScene& scene, size_t i) {
 cl_float4 specular_bounding_sphere(const DeviceScene& scene) {
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (size_t i = 0; i < scene.triangles.size(); ++i) {
-        if (!is_specular_triangle(scene, i)) continue;
+        if (!material_is_specular(scene.materials[size_t(scene.infos[i].material)])) continue;
         for (const cl_float4* p : {&scene.triangles[i].p0, &scene.triangles[i].p1, &scene.triangles[i].p2})
             for (int a = 0; a < 3; ++a) {
                 lo[a] = std::min(lo[a], double(p->s[a]));

@@ -199,10 +199,11 @@ std::vector<Material> materials_in_use(const DeviceScene& scene) {
     return in_use;
 }
 
+bool material_is_specular(const Material& m) { return m.kind == MATERIAL_MIRROR || m.kind == MATERIAL_GLASS; }
+
 bool has_specular_surfaces(const DeviceScene& scene) {
     const std::vector<Material> used = materials_in_use(scene);
-    return std::any_of(used.begin(), used.end(),
-                       [](const Material& m) { return m.kind == MATERIAL_MIRROR || m.kind == MATERIAL_GLASS; });
+    return std::any_of(used.begin(), used.end(), material_is_specular);
 }
 
 DeviceScene build_device_scene(const Scene& scene, int width, int height, EnvironmentSampling env_sampling) {

@@ -59,6 +59,9 @@ struct DeviceScene {
 // from every material: the MIS tests build kernels for paths whose materials no triangle has.
 std::vector<Material> materials_in_use(const DeviceScene& scene);
 
+// Whether the material is wholly specular: a mirror or glass.
+bool material_is_specular(const Material& m);
+
 // Whether some triangle is a mirror or glass.
 bool has_specular_surfaces(const DeviceScene& scene);
 
