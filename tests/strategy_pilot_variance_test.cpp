@@ -158,10 +158,15 @@ TEST(StrategyPilotAdaptive, CreditsTheCameraImageNotTheLightImage) {
     RenderStats stats;
     const StrategyPilot plain = run_strategy_pilot(test_device(), scene, options, 64, 0.0, false, &stats);
     const StrategyPilot adaptive = run_strategy_pilot(test_device(), scene, options, 64, 0.0, true, &stats);
-    ASSERT_EQ(plain.candidates.size(), adaptive.candidates.size());
+    // The mixes between the ends run only where no end leads by a margin measured in seconds,
+    // so under load one pilot may run them and the other not (6 candidates against 3 under a
+    // newcomer CI beside another build): the ends are compared, and every candidate both ran.
     bool saw_pt = false, saw_lt = false;
-    for (size_t i = 0; i < plain.candidates.size(); ++i) {
-        const StrategyCandidate &p = plain.candidates[i], &a = adaptive.candidates[i];
+    for (const StrategyCandidate& a : adaptive.candidates) {
+        auto same = std::find_if(plain.candidates.begin(), plain.candidates.end(),
+                                 [&](const StrategyCandidate& c) { return c.name == a.name; });
+        if (same == plain.candidates.end()) continue;
+        const StrategyCandidate& p = *same;
         EXPECT_EQ(p.variance_transport, a.variance_transport) << p.name << ": the same passes";
         EXPECT_EQ(p.adaptive_variance_left, 1.0) << p.name;
         EXPECT_EQ(p.adaptive_extra_share, 0.0) << p.name;
