@@ -75,12 +75,21 @@ __kernel void render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, __global float
 #ifdef SAMPLER_ZSOBOL
     Rng rng = rng_init_zsobol((uint)px, (uint)py, sample_index, params.seed, params.zsobol_log2_spp,
                               params.zsobol_base4_digits);
-    Rng position_rng = rng_init_zsobol((uint)px, (uint)py, position_sample_index, params.position_seed,
-                                       params.zsobol_log2_spp, params.zsobol_base4_digits);
 #else
     Rng rng = rng_init((uint)pixel, sample_index, params.seed);
-    Rng position_rng = rng_init((uint)pixel, position_sample_index, params.position_seed);
 #endif
+    /* Only the strategy pilot's passes draw the pixel position from another sample than the
+     * rest (host/render/strategy_pilot.cpp); every other pass takes both from one stream, so
+     * it sets up one. */
+    Rng position_rng = rng;
+    if (params.position_seed != params.seed || params.position_sample_index != params.sample_index) {
+#ifdef SAMPLER_ZSOBOL
+        position_rng = rng_init_zsobol((uint)px, (uint)py, position_sample_index, params.position_seed,
+                                       params.zsobol_log2_spp, params.zsobol_base4_digits);
+#else
+        position_rng = rng_init((uint)pixel, position_sample_index, params.position_seed);
+#endif
+    }
     rng_seek(&position_rng, SAMPLE_DRAW_PIXEL);
     float2 raster = (float2)((float)px, (float)py) + rng_next2(&position_rng);
 #if PT_ONE_VERTEX_AT_A_TIME
