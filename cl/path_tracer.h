@@ -147,9 +147,14 @@ inline void path_tracer_light_samples(const SceneData* scene, const Rng* rng, fl
  * (generate_camera_subpath, random_walk in radiance mode) with its s = 0 and s = 1
  * connections made at each vertex, added into *sum (L 0 and bad_strategy -1 on entry). */
 inline void path_tracer_sample(const SceneData* scene, Rng* rng, float2 raster, PathTracerSum* sum) {
+    /* The camera ray alone, without its density (camera_subpath_ray): that is vertex 1's
+     * forward density, which no weight here reads (an emitter seen straight from the camera has
+     * no other pt strategy), and whose film test (camera_raster_of) only dropped the rare sample
+     * that rounding put just past the film's last row or column. */
     float3 o, d;
-    float pdf_fwd = camera_subpath_ray(scene, rng, raster, &o, &d);
-    if (pdf_fwd == 0.0f) return;
+    rng_seek(rng, SAMPLE_DRAW_LENS);
+    camera_generate_ray(scene->camera, raster, rng_next2(rng), &o, &d);
+    float pdf_fwd = 0.0f;
     PathVertex prev = vertex_at(VERTEX_CAMERA, o, (float3)(0.0f), 0.0f);
     prev.beta = (float3)(1.0f);
     /* The BSDF of each surface vertex, made once: its light samples, its bounce and the next
@@ -206,10 +211,12 @@ inline void path_tracer_sample(const SceneData* scene, Rng* rng, float2 raster, 
                 pdf_fwd = bsdf_pdf(&prev_bsdf, prev.wo, w);
 #endif
             }
-            v.pdf_fwd = convert_density(scene, &prev, pdf_fwd, &v);
+            if (i > 1) { /* vertex 1's is never read (above, at the camera ray) */
+                v.pdf_fwd = convert_density(scene, &prev, pdf_fwd, &v);
 #ifdef HAS_MEDIA
-            v.pdf_fwd *= v.dist_fwd;
+                v.pdf_fwd *= v.dist_fwd;
 #endif
+            }
             if (vertex_is_light(&v)) path_tracer_add(sum, path_tracer_emitter_hit(scene, &prev, &v, t), 0, t);
         }
         if (v.type == VERTEX_LIGHT || i == MAX_DEPTH + 1) break;
