@@ -52,9 +52,11 @@ __attribute__((always_inline)) inline BvhRay bvh_ray(float3 o, float3 d) {
     r.ox = o.x;
     r.oy = o.y;
     r.oz = o.z;
-    r.ix = 1.0f / (fabs(d.x) > BVH_MIN_DIR ? d.x : copysign(BVH_MIN_DIR, d.x));
-    r.iy = 1.0f / (fabs(d.y) > BVH_MIN_DIR ? d.y : copysign(BVH_MIN_DIR, d.y));
-    r.iz = 1.0f / (fabs(d.z) > BVH_MIN_DIR ? d.z : copysign(BVH_MIN_DIR, d.z));
+    /* All three axes in one vector division (the same quotients as three scalar ones). */
+    float3 inv = 1.0f / select(copysign((float3)(BVH_MIN_DIR), d), d, isgreater(fabs(d), (float3)(BVH_MIN_DIR)));
+    r.ix = inv.x;
+    r.iy = inv.y;
+    r.iz = inv.z;
     r.nx = r.ix < 0.0f ? 1 : 0;
     r.ny = r.iy < 0.0f ? 3 : 2;
     r.nz = r.iz < 0.0f ? 5 : 4;
