@@ -84,10 +84,12 @@ __attribute__((always_inline)) inline BvhRay bvh_ray(float3 o, float3 d) {
 typedef float8 bvh_floatn;
 typedef int8 bvh_intn;
 #define bvh_vloadn vload8
+#define bvh_vstoren vstore8
 #elif BVH_WIDTH == 4
 typedef float4 bvh_floatn;
 typedef int4 bvh_intn;
 #define bvh_vloadn vload4
+#define bvh_vstoren vstore4
 #else
 #error "BVH_WIDTH must be 4 or 8"
 #endif
@@ -213,9 +215,9 @@ __attribute__((always_inline)) inline bool bvh_hit_triangle(__global const float
 
 /* intersect: pushes child `lane` if the ray enters its box and prefetches what it points to. */
 #define BVH_CLOSEST_LANE(lane)                                                                    \
-    if (hit_mask.s##lane) {                                                                       \
+    {                                                                                             \
         int c_ = node->child[lane];                                                               \
-        BVH_PUSH_SORTED(c_, t_near.s##lane);                                                      \
+        BVH_PUSH_SORTED(c_, t_nears[lane]);                                                       \
         if (c_ >= 0) BVH_PREFETCH(nodes + c_, sizeof(BvhNode));                                   \
         else BVH_PREFETCH(tris + BVH_LEAF_FIRST(c_), sizeof(Triangle) * BVH_LEAF_COUNT(c_));      \
     }
@@ -223,7 +225,7 @@ __attribute__((always_inline)) inline bool bvh_hit_triangle(__global const float
 /* occluded: tests leaf child `lane` at once if the ray enters its box, else pushes the
  * interior child (unsorted: see occluded). */
 #define BVH_ANY_LANE(lane)                                                                        \
-    if (hit_mask.s##lane) {                                                                       \
+    {                                                                                             \
         int c_ = node->child[lane];                                                               \
         if (c_ < 0) {                                                                             \
             if (bvh_leaf_occluded(tris, cutouts, c_, &r, tmax)) return true;                      \
@@ -233,11 +235,25 @@ __attribute__((always_inline)) inline bool bvh_hit_triangle(__global const float
         }                                                                                         \
     }
 
+/* The lanes of hit_mask that are set, as bits (lane k: bit k). */
+__attribute__((always_inline)) inline uint bvh_lane_bits(bvh_intn hit_mask) {
 #if BVH_WIDTH == 8
-#define BVH_ALL_LANES(M) M(0) M(1) M(2) M(3) M(4) M(5) M(6) M(7)
+    uint8 bits = as_uint8(hit_mask) & (uint8)(1u, 2u, 4u, 8u, 16u, 32u, 64u, 128u);
+    uint4 folded = bits.lo | bits.hi;
 #else
-#define BVH_ALL_LANES(M) M(0) M(1) M(2) M(3)
+    uint4 folded = as_uint4(hit_mask) & (uint4)(1u, 2u, 4u, 8u);
 #endif
+    uint2 quarter = folded.lo | folded.hi;
+    return quarter.x | quarter.y;
+}
+
+/* M(lane) for each lane the ray enters, in lane order, as a test of every lane would: a node's
+ * ray enters 1-3 of its children's boxes, and a branch per lane cost more than the loop. */
+#define BVH_ALL_LANES(M)                                                                          \
+    for (uint bits_ = bvh_lane_bits(hit_mask); bits_ != 0u; bits_ &= bits_ - 1u) {                \
+        int lane_ = 31 - (int)clz(bits_ & (0u - bits_));                                          \
+        M(lane_)                                                                                  \
+    }
 
 /* Closest hit along o + t d with t in (0, tmax). d need not be unit length; t is in units of
  * |d|. On a miss returns false with hit->triangle = -1 and hit->t = tmax. With exclude_end,
@@ -272,6 +288,8 @@ __attribute__((always_inline)) inline bool intersect_closest(__global const BvhN
             __global const BvhNode* node = nodes + current;
             bvh_floatn t_near;
             bvh_intn hit_mask = bvh_hit_boxes(node, &r, hit->t, &t_near);
+            float t_nears[BVH_WIDTH];
+            bvh_vstoren(t_near, 0, t_nears);
             int base = sp;
             BVH_ALL_LANES(BVH_CLOSEST_LANE)
             if (sp > base) {
