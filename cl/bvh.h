@@ -213,7 +213,7 @@ __attribute__((always_inline)) inline bool bvh_hit_triangle(__global const float
         stack_node[j_] = (c_);                                                                    \
     } while (0)
 
-/* intersect: pushes child `lane` if the ray enters its box and prefetches what it points to. */
+/* intersect: pushes child `lane` (one whose box the ray enters) and prefetches what it points to. */
 #define BVH_CLOSEST_LANE(lane)                                                                    \
     {                                                                                             \
         int c_ = node->child[lane];                                                               \
@@ -222,8 +222,8 @@ __attribute__((always_inline)) inline bool bvh_hit_triangle(__global const float
         else BVH_PREFETCH(tris + BVH_LEAF_FIRST(c_), sizeof(Triangle) * BVH_LEAF_COUNT(c_));      \
     }
 
-/* occluded: tests leaf child `lane` at once if the ray enters its box, else pushes the
- * interior child (unsorted: see occluded). */
+/* occluded: child `lane` (one whose box the ray enters): a leaf is tested at once, an interior
+ * child pushed (unsorted: see occluded). */
 #define BVH_ANY_LANE(lane)                                                                        \
     {                                                                                             \
         int c_ = node->child[lane];                                                               \

@@ -202,16 +202,16 @@ inline void path_tracer_sample(const SceneData* scene, Rng* rng, float2 raster, 
         /* The forward density from the positions, as random_walk (cl/walk.h says why), and the
          * emitter the vertex may be: neither with delta lights only (the condition is constant). */
         if (!PT_DELTA_LIGHTS_ONLY) {
-            if (i > 1 && !prev.delta) {
-                float3 w = direction_from(&prev, &v);
-#ifdef HAS_MEDIA
-                pdf_fwd = prev.type == VERTEX_MEDIUM ? vertex_scatter_pdf(scene, &prev, prev.wo, w)
-                                                     : bsdf_pdf(&prev_bsdf, prev.wo, w);
-#else
-                pdf_fwd = bsdf_pdf(&prev_bsdf, prev.wo, w);
-#endif
-            }
             if (i > 1) { /* vertex 1's is never read (above, at the camera ray) */
+                if (!prev.delta) {
+                    float3 w = direction_from(&prev, &v);
+#ifdef HAS_MEDIA
+                    pdf_fwd = prev.type == VERTEX_MEDIUM ? vertex_scatter_pdf(scene, &prev, prev.wo, w)
+                                                         : bsdf_pdf(&prev_bsdf, prev.wo, w);
+#else
+                    pdf_fwd = bsdf_pdf(&prev_bsdf, prev.wo, w);
+#endif
+                }
                 v.pdf_fwd = convert_density(scene, &prev, pdf_fwd, &v);
 #ifdef HAS_MEDIA
                 v.pdf_fwd *= v.dist_fwd;

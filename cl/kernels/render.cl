@@ -43,6 +43,16 @@
  * s * STRATEGY_STRIDE + t (own pixel for t > 1, the splat's for t = 1). */
 #define STRATEGY_SLOTS ((MAX_DEPTH + 2) * STRATEGY_STRIDE)
 
+/* The sample vector of sample sample_index of `seed` at pixel `pixel` (row-major). */
+inline Rng pixel_sample_rng(const RenderParams* params, int pixel, uint sample_index, uint seed) {
+#ifdef SAMPLER_ZSOBOL
+    return rng_init_zsobol((uint)(pixel % params->width), (uint)(pixel / params->width), sample_index, seed,
+                           params->zsobol_log2_spp, params->zsobol_base4_digits);
+#else
+    return rng_init((uint)pixel, sample_index, seed);
+#endif
+}
+
 __kernel void render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, __global float4* camera_out,
                           __global SplatRecord* splats, __global const int* run_pixels,
                           __global float2* subset_moments
@@ -72,24 +82,13 @@ __kernel void render_bdpt(SCENE_KERNEL_ARGS, RenderParams params, __global float
     int px = pixel % params.width, py = pixel / params.width;
     /* The whole sample, both subpaths and every connection, draws from the pixel's own sample
      * vector at the draws cl/sample_dimensions.h assigns. */
-#ifdef SAMPLER_ZSOBOL
-    Rng rng = rng_init_zsobol((uint)px, (uint)py, sample_index, params.seed, params.zsobol_log2_spp,
-                              params.zsobol_base4_digits);
-#else
-    Rng rng = rng_init((uint)pixel, sample_index, params.seed);
-#endif
+    Rng rng = pixel_sample_rng(&params, pixel, sample_index, params.seed);
     /* Only the strategy pilot's passes draw the pixel position from another sample than the
      * rest (host/render/strategy_pilot.cpp); every other pass takes both from one stream, so
      * it sets up one. */
     Rng position_rng = rng;
-    if (params.position_seed != params.seed || params.position_sample_index != params.sample_index) {
-#ifdef SAMPLER_ZSOBOL
-        position_rng = rng_init_zsobol((uint)px, (uint)py, position_sample_index, params.position_seed,
-                                       params.zsobol_log2_spp, params.zsobol_base4_digits);
-#else
-        position_rng = rng_init((uint)pixel, position_sample_index, params.position_seed);
-#endif
-    }
+    if (params.position_seed != params.seed || params.position_sample_index != params.sample_index)
+        position_rng = pixel_sample_rng(&params, pixel, position_sample_index, params.position_seed);
     rng_seek(&position_rng, SAMPLE_DRAW_PIXEL);
     float2 raster = (float2)((float)px, (float)py) + rng_next2(&position_rng);
 #if PT_ONE_VERTEX_AT_A_TIME
