@@ -68,7 +68,7 @@ inline float4 texture_texel(const Textures* tex, __global const TextureInfo* t, 
  * repeating the image or clamping to its edge. */
 inline void texture_axis(float x, int size, int clamp_to_edge, int* i0, int* i1, float* w) {
     x -= 0.5f; /* texel centres are at half-integers */
-    float f = floor(x);
+    float f = scalar_floor(x);
     *w = x - f;
     int i = (int)f;
     if (clamp_to_edge) {
@@ -92,8 +92,8 @@ inline float4 texture_lookup(const Textures* tex, int texture, float2 uv) {
         v = clamp(v, 0.0f, 1.0f);
     } else {
         /* Keep the coordinate small before scaling to texels: large repeats lose precision. */
-        u -= floor(u);
-        v -= floor(v);
+        u -= scalar_floor(u);
+        v -= scalar_floor(v);
     }
     int x0, x1, y0, y1;
     float wx, wy;
