@@ -138,7 +138,7 @@ inline int medium_beyond(const SceneData* scene, int material, float3 ng, float3
 /* exp(-sigma t) per channel, with exp(-0 * infinity) = 1. One vector exp for the three
  * channels: three scalar calls were an eighth of a path-traced sample's instructions in fog. */
 inline float3 beer_lambert(float3 sigma, float t) {
-    return select(exp(-sigma * t), (float3)(1.0f), sigma <= 0.0f);
+    return select(exp_of_nonpositive(-sigma * t), (float3)(1.0f), sigma <= 0.0f);
 }
 
 /* Moves a ray off an index-matched boundary it hit: into the medium beyond, from the far side

@@ -66,6 +66,13 @@ __kernel void log_test(__global const float* x, __global const float* u, __globa
     out[gid] = (float2)(log_of_normal(x[gid]), sample_unit_exponential(u[gid]));
 }
 
+/* out[i] = exp_of_nonpositive(x[i]) (its three channels: x[i], x[i] / 2 and x[i] / 4). */
+__kernel void exp_test(__global const float* x, __global float4* out) {
+    int gid = get_global_id(0);
+    float3 e = exp_of_nonpositive((float3)(x[gid], 0.5f * x[gid], 0.25f * x[gid]));
+    out[gid] = (float4)(e.x, e.y, e.z, 0.0f);
+}
+
 /* out[i] = (find_interval(cdf, n, u[i]), find_interval_guided(cdf, n, guide, g, u[i])). */
 __kernel void find_interval_guided_test(__global const float* cdf, int n, __global const float* guide, int g,
                                         __global const float* u, __global int2* out) {
