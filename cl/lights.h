@@ -94,6 +94,15 @@ inline int spot_contains(__global const Light* light, float3 w) {
     return one_minus_cos_between(w, xyz(light->direction)) <= light->one_minus_cos_total;
 }
 
+/* Whether scene point x is inside the spot's cone. The direction is d * rsqrt(d . d): PoCL's
+ * normalize is that product, after guards for zero, tiny and huge vectors (13 instructions a
+ * call, on every light sample's selection in a scene with spots). At the light's own position
+ * it is NaN, which the comparison counts as outside. */
+inline int spot_contains_point(__global const Light* light, float3 x) {
+    float3 d = x - xyz(light->position);
+    return spot_contains(light, d * rsqrt(dot(d, d)));
+}
+
 /* pbrt-v3 SpotLight::Falloff: 1 inside the inner cone, 0 outside the outer one, a quartic ramp
  * in cos between; in terms of 1 - cos, which keeps a cone of any width apart from its axis. */
 inline float spot_falloff(__global const Light* light, float3 w) {
@@ -120,7 +129,7 @@ inline float spot_falloff(__global const Light* light, float3 w) {
 inline float light_weight_at(const SceneData* scene, int i, float3 x) {
     __global const Light* light = &scene->lights[i];
     if (light->kind != LIGHT_SPOT) return light->select_pdf;
-    return spot_contains(light, normalize(x - xyz(light->position))) ? light->nee_weight : 0.0f;
+    return spot_contains_point(light, x) ? light->nee_weight : 0.0f;
 }
 
 inline float light_weights_total_at(const SceneData* scene, float3 x) {
@@ -178,7 +187,7 @@ inline float nee_light_probability(const SceneData* scene, int i, float3 x) {
         float area_total = scene->light_cdf[area];
         return area_total > 0.0f ? light->select_pdf / area_total : 0.0f;
     }
-    if (light->kind == LIGHT_SPOT) return spot_contains(light, normalize(x - xyz(light->position))) ? 1.0f : 0.0f;
+    if (light->kind == LIGHT_SPOT) return spot_contains_point(light, x) ? 1.0f : 0.0f;
     return 1.0f;
 }
 
