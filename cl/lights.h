@@ -143,12 +143,19 @@ inline float light_weights_total_at(const SceneData* scene, float3 x) {
  * (rest_of_choice); -1 if no light can reach x. */
 inline int sample_light_for_point(const SceneData* scene, float3 x, float u, float* select_pdf, float* u_rest) {
 #ifdef NEE_CONE_AWARE
-    float total = light_weights_total_at(scene, x);
+    /* Each light's weight once, summed as light_weights_total_at does: a spot's costs a cone
+     * test. */
+    float weights[NEE_CONE_AWARE_MAX_LIGHTS];
+    float total = 0.0f;
+    for (int i = 0; i < scene->info->light_count; ++i) {
+        weights[i] = light_weight_at(scene, i, x);
+        total += weights[i];
+    }
     float target = u * total;
     int chosen = -1;
     float chosen_weight = 0.0f;
     for (int i = 0; i < scene->info->light_count; ++i) {
-        float w = light_weight_at(scene, i, x);
+        float w = weights[i];
         if (w <= 0.0f) continue;
         chosen = i; /* the last light with weight, should rounding leave target >= total */
         chosen_weight = w;

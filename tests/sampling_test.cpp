@@ -218,8 +218,11 @@ TEST(Sampling, ExpOfNonpositiveMatchesDoublePrecision) {
             if (e > worst) worst = e, worst_x = arg;
         }
     EXPECT_LE(worst, 1.2e-7) << "worst relative error of exp_of_nonpositive, at x = " << worst_x;
-    for (size_t i = 0; i < checked; ++i)
-        if (x[i] == 0.0f) EXPECT_EQ(r[i].s[0], 1.0f) << "exp(" << x[i] << ")";
+    for (size_t i = 0; i < checked; ++i) {
+        if (x[i] == 0.0f) {
+            EXPECT_EQ(r[i].s[0], 1.0f) << "exp(" << x[i] << ")";
+        }
+    }
     for (size_t i = checked; i + 1 < x.size(); ++i) EXPECT_EQ(r[i].s[0], 0.0f) << "exp(" << x[i] << ")";
     EXPECT_TRUE(std::isnan(r.back().s[0])) << "exp(NaN)";
 }

@@ -145,6 +145,10 @@ typedef struct {
 #define LIGHT_DIRECTIONAL 3
 #define LIGHT_ENVIRONMENT 4
 
+/* The most lights a scene may have for light samples with spot cones in view (NEE_CONE_AWARE,
+ * cl/lights.h: each sample weighs every light). */
+#define NEE_CONE_AWARE_MAX_LIGHTS 8
+
 typedef struct {
     clbdpt_float4 position;  /* point, spot */
     clbdpt_float4 direction; /* spot: unit axis; directional: unit direction light travels */

@@ -50,7 +50,7 @@ SamplerKind parse_sampler(const std::string& name);  // throws Error
 
 // Scenes with spot lights and at most this many lights take their light samples with spot
 // cones in view (NEE_CONE_AWARE, cl/lights.h); each such sample loops over every light.
-constexpr size_t kConeAwareMaxLights = 8;
+constexpr size_t kConeAwareMaxLights = NEE_CONE_AWARE_MAX_LIGHTS;
 
 // Scenes without media with 2 to this many light groups (the area lights together, every other
 // light alone) take a light sample of each group at every vertex (NEE_EVERY_LIGHT,
