@@ -6,6 +6,7 @@
 #define CLBDPT_TEXTURES_H
 
 #include "shared/types.h"
+#include "geometry.h" /* scalar_floor */
 
 /* The sRGB decoding curve (IEC 61966-2-1) at the 256 8-bit codes:
  * c / 12.92 for c <= 0.04045, else ((c + 0.055) / 1.055)^2.4, c = code / 255. */
