@@ -113,6 +113,19 @@ inline cl::Kernel test_kernel(const std::string& file, const std::vector<std::st
     return cl::Kernel(build.program, name);
 }
 
+// Runs kernel `name` of `file` (no defines) as out[i] = f(in[i]): its arguments are the input
+// and the output buffer, one work item per element. Returns out.
+template <typename Out, typename In>
+std::vector<Out> map_kernel(const std::string& file, const char* name, const std::vector<In>& in) {
+    cl::Kernel k = test_kernel(file, {}, name);
+    cl::Buffer in_buffer = upload(in);
+    cl::Buffer out = output_buffer<Out>(in.size());
+    k.setArg(0, in_buffer);
+    k.setArg(1, out);
+    launch(k, in.size());
+    return download<Out>(out, in.size());
+}
+
 // ---- Hand-made scenes -----------------------------------------------------------------------
 // Built through the real loader path (Scene -> build_device_scene), so lights, selection
 // probabilities and the environment distribution are the renderer's.
