@@ -30,6 +30,13 @@ std::vector<cl_float4> warp(Warp w, float cos_max, size_t n, uint32_t seed) {
     return download<cl_float4>(out, n);
 }
 
+// The float whose bits are b.
+float float_from_bits(uint32_t b) {
+    float f;
+    std::memcpy(&f, &b, sizeof f);
+    return f;
+}
+
 constexpr size_t kSamples = 1 << 18;
 constexpr int kRadial = 10, kAngular = 20;
 
@@ -138,12 +145,7 @@ TEST(Sampling, InverseTrigMatchesDoublePrecision) {
 // coefficient by 1e-5 or more).
 TEST(Sampling, LogOfNormalMatchesDoublePrecision) {
     std::vector<float> x;
-    auto from_bits = [](uint32_t b) {
-        float f;
-        std::memcpy(&f, &b, sizeof f);
-        return f;
-    };
-    for (uint64_t b = 0x00800000u; b <= 0x7f7fffffu; b += 4096) x.push_back(from_bits(uint32_t(b)));
+    for (uint64_t b = 0x00800000u; b <= 0x7f7fffffu; b += 4096) x.push_back(float_from_bits(uint32_t(b)));
     const float root_half = float(std::sqrt(0.5));
     for (float v : {1.0f, std::nextafter(1.0f, 0.0f), std::nextafter(1.0f, 2.0f), root_half,
                     std::nextafter(root_half, 0.0f), std::nextafter(root_half, 1.0f), std::ldexp(1.0f, -24),
@@ -181,13 +183,9 @@ TEST(Sampling, LogOfNormalMatchesDoublePrecision) {
 // factor 2; with the r^4 coefficient off by 1e-5 the test fails).
 TEST(Sampling, ExpOfNonpositiveMatchesDoublePrecision) {
     std::vector<float> x;
-    auto from_bits = [](uint32_t b) {
-        float f;
-        std::memcpy(&f, &b, sizeof f);
-        return f;
-    };
     // Negative floats: bits 0x80000000 (-0) upwards grow in magnitude up to -87.
-    for (uint64_t b = 0x80000000u; from_bits(uint32_t(b)) >= -87.0f; b += 256) x.push_back(from_bits(uint32_t(b)));
+    for (uint64_t b = 0x80000000u; float_from_bits(uint32_t(b)) >= -87.0f; b += 256)
+        x.push_back(float_from_bits(uint32_t(b)));
     const float half_ln2 = float(0.5 * std::log(2.0));
     for (float v : {0.0f, -87.0f, -87.29f, -half_ln2, std::nextafter(-half_ln2, 0.0f), std::nextafter(-half_ln2, -1.0f),
                     -3 * half_ln2, std::nextafter(-3 * half_ln2, 0.0f), -1e-30f})
