@@ -33,11 +33,11 @@
 
 /* Per-ray constants of the traversal and of the watertight triangle test. */
 typedef struct {
-    /* Slab test: origin, inverse direction and, per axis, the row of BvhNode::bounds holding
-     * the plane the ray meets first (the lower one if it runs towards +k); the far one is
-     * near ^ 1. */
+    /* Slab test: origin, negated inverse direction and, per axis, the row of BvhNode::bounds
+     * holding the plane the ray meets first (the lower one if it runs towards +k); the far one
+     * is near ^ 1. */
     float ox, oy, oz;
-    float ix, iy, iz;
+    float nix, niy, niz;
     int nx, ny, nz;
     /* Triangle test (Woop et al. section 3): kz = axis of the largest |d|, kx and ky the other
      * two in cyclic order (the paper swaps them when d[kz] < 0 to keep the winding; a two-sided
@@ -54,12 +54,12 @@ __attribute__((always_inline)) inline BvhRay bvh_ray(float3 o, float3 d) {
     r.oz = o.z;
     /* All three axes in one vector division (the same quotients as three scalar ones). */
     float3 inv = 1.0f / select(copysign((float3)(BVH_MIN_DIR), d), d, isgreater(fabs(d), (float3)(BVH_MIN_DIR)));
-    r.ix = inv.x;
-    r.iy = inv.y;
-    r.iz = inv.z;
-    r.nx = r.ix < 0.0f ? 1 : 0;
-    r.ny = r.iy < 0.0f ? 3 : 2;
-    r.nz = r.iz < 0.0f ? 5 : 4;
+    r.nix = -inv.x;
+    r.niy = -inv.y;
+    r.niz = -inv.z;
+    r.nx = inv.x < 0.0f ? 1 : 0;
+    r.ny = inv.y < 0.0f ? 3 : 2;
+    r.nz = inv.z < 0.0f ? 5 : 4;
 
     float3 a = fabs(d);
     int kz = a.x > a.y ? (a.x > a.z ? 0 : 2) : (a.y > a.z ? 1 : 2);
@@ -100,12 +100,14 @@ typedef int4 bvh_intn;
  * Empty slots (lower +inf, upper -inf) give t0 = +inf > t1 = -inf: never entered. */
 __attribute__((always_inline)) inline bvh_intn bvh_hit_boxes(__global const BvhNode* node, const BvhRay* r,
                                                            float tmax, bvh_floatn* t_near) {
-    bvh_floatn tx0 = (bvh_vloadn(0, node->bounds[r->nx]) - r->ox) * r->ix;
-    bvh_floatn tx1 = (bvh_vloadn(0, node->bounds[r->nx ^ 1]) - r->ox) * r->ix;
-    bvh_floatn ty0 = (bvh_vloadn(0, node->bounds[r->ny]) - r->oy) * r->iy;
-    bvh_floatn ty1 = (bvh_vloadn(0, node->bounds[r->ny ^ 1]) - r->oy) * r->iy;
-    bvh_floatn tz0 = (bvh_vloadn(0, node->bounds[r->nz]) - r->oz) * r->iz;
-    bvh_floatn tz1 = (bvh_vloadn(0, node->bounds[r->nz ^ 1]) - r->oz) * r->iz;
+    /* (o - plane) * -inv is (plane - o) * inv to the bit (negation is exact), and the plane is
+     * then the subtraction's second operand, which x86 reads straight from memory. */
+    bvh_floatn tx0 = (r->ox - bvh_vloadn(0, node->bounds[r->nx])) * r->nix;
+    bvh_floatn tx1 = (r->ox - bvh_vloadn(0, node->bounds[r->nx ^ 1])) * r->nix;
+    bvh_floatn ty0 = (r->oy - bvh_vloadn(0, node->bounds[r->ny])) * r->niy;
+    bvh_floatn ty1 = (r->oy - bvh_vloadn(0, node->bounds[r->ny ^ 1])) * r->niy;
+    bvh_floatn tz0 = (r->oz - bvh_vloadn(0, node->bounds[r->nz])) * r->niz;
+    bvh_floatn tz1 = (r->oz - bvh_vloadn(0, node->bounds[r->nz ^ 1])) * r->niz;
     bvh_floatn t0 = max(max(tx0, ty0), max(tz0, 0.0f));
     bvh_floatn t1 = min(min(tx1, ty1), min(tz1, tmax)) * (1.0f + 2.0f * FLOAT_GAMMA(3));
     *t_near = t0;
