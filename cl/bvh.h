@@ -114,6 +114,17 @@ __attribute__((always_inline)) inline bvh_intn bvh_hit_boxes(__global const BvhN
     return t0 <= t1;
 }
 
+/* The lanes of a 4-lane mask that are set, as bits (lane k: bit k): one movmskps on x86. */
+__attribute__((always_inline)) inline uint bvh_mask_bits4(int4 mask) {
+#if defined(__SSE__)
+    return (uint)__builtin_ia32_movmskps(as_float4(mask));
+#else
+    uint4 bits = as_uint4(mask) & (uint4)(1u, 2u, 4u, 8u);
+    uint2 half_bits = bits.lo | bits.hi;
+    return half_bits.x | half_bits.y;
+#endif
+}
+
 /* Watertight ray-triangle test (Woop et al. 2013; pbrt-v3 Triangle::Intersect, float version).
  * v: the triangle's 12 floats (p0, p1, p2 as float4). On a hit with t in (0, tmax) returns true
  * and sets *t and the barycentrics of p1 and p2. Hits whose t could be 0 or less through
@@ -144,17 +155,23 @@ __attribute__((always_inline)) inline bool bvh_hit_triangle(__global const float
     float e0 = p1x * p2y - p1y * p2x;
     float e1 = p2x * p0y - p2y * p0x;
     float e2 = p0x * p1y - p0y * p1x;
+    /* Which of them are negative, positive and zero, as bits of one vector compare each. */
+    float4 e = (float4)(e0, e1, e2, e2);
+    uint negative = bvh_mask_bits4(e < 0.0f), positive = bvh_mask_bits4(e > 0.0f);
 #ifdef cl_khr_fp64
     /* An edge function of exactly 0 may be a rounding artefact: redo it in double, where the
      * float products are exact, so its sign is the exact one (Woop et al. section 3.2). */
-    if (e0 == 0.0f || e1 == 0.0f || e2 == 0.0f) {
+    if (bvh_mask_bits4(e == 0.0f) != 0u) {
         e0 = (float)((double)p1x * (double)p2y - (double)p1y * (double)p2x);
         e1 = (float)((double)p2x * (double)p0y - (double)p2y * (double)p0x);
         e2 = (float)((double)p0x * (double)p1y - (double)p0y * (double)p1x);
+        e = (float4)(e0, e1, e2, e2);
+        negative = bvh_mask_bits4(e < 0.0f);
+        positive = bvh_mask_bits4(e > 0.0f);
     }
 #endif
     /* Inside iff no two edge functions have opposite signs (zeros count as inside). */
-    if ((e0 < 0.0f || e1 < 0.0f || e2 < 0.0f) && (e0 > 0.0f || e1 > 0.0f || e2 > 0.0f)) return false;
+    if ((negative != 0u) & (positive != 0u)) return false;
     float det = e0 + e1 + e2;
     if (det == 0.0f) return false; /* the ray lies in the triangle's plane */
 
