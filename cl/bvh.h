@@ -251,8 +251,10 @@ __attribute__((always_inline)) inline bool bvh_hit_triangle(__global const float
     {                                                                                             \
         int c_ = node->child[lane];                                                               \
         BVH_PUSH_SORTED(c_, t_nears[lane]);                                                       \
-        if (c_ >= 0) BVH_PREFETCH_NODE(nodes + c_);                                                  \
-        else BVH_PREFETCH(tris + BVH_LEAF_FIRST(c_), sizeof(Triangle) * BVH_LEAF_COUNT(c_));      \
+        /* A node's lines, or as many of a leaf's triangles (up to 4 x 48 bytes from anywhere in \
+         * a line): chosen without a branch, which whether a child is a leaf would mispredict. */ \
+        BVH_PREFETCH_NODE(c_ >= 0 ? (__global const char*)(nodes + c_)                           \
+                                  : (__global const char*)(tris + BVH_LEAF_FIRST(c_)));           \
     }
 
 /* occluded: child `lane` (one whose box the ray enters): a leaf is tested at once, an interior
