@@ -206,20 +206,16 @@ __attribute__((always_inline)) inline bool bvh_hit_triangle(__global const float
 
 /* Prefetching the children a traversal pushes overlaps their cache misses with the work on the
  * nearer child (10-30% more closest-hit rays per second on PoCL with traversal_bench's
- * 1M-triangle scene). OpenCL's prefetch() is a no-op on PoCL, so these use the compiler's
- * builtin, on CPUs only: GPU back ends need not support it.
- * BVH_PREFETCH: `bytes` from p, a cache line at a time.
- * BVH_PREFETCH_NODE: a node's cache lines (4, or 2 at BVH_WIDTH 4), written out (the loop above stays a loop, 4
- * instructions a line; the nodes buffer and so every node start on a line). */
+ * 1M-triangle scene). OpenCL's prefetch() is a no-op on PoCL, so this uses the compiler's
+ * builtin, on CPUs only: GPU back ends need not support it. BVH_PREFETCH_CHILD(p) fetches a
+ * node's cache lines from p (4, or 2 at BVH_WIDTH 4; the nodes buffer and so every node start
+ * on a line), written out: a loop over lines stayed a loop, 4 instructions a line. A leaf's
+ * triangles get the same span, which at BVH_WIDTH 8 covers a leaf's 4 x 48 bytes from anywhere
+ * in a line. */
 #if defined(__x86_64__) || defined(__aarch64__)
-#define BVH_PREFETCH(p, bytes)                                                                    \
+#define BVH_PREFETCH_CHILD(p)                                                                     \
     do {                                                                                          \
         __global const char* p_ = (__global const char*)(p);                                      \
-        for (int o_ = 0; o_ < (int)(bytes); o_ += 64) __builtin_prefetch(p_ + o_);                 \
-    } while (0)
-#define BVH_PREFETCH_NODE(node)                                                                   \
-    do {                                                                                          \
-        __global const char* p_ = (__global const char*)(node);                                   \
         __builtin_prefetch(p_);                                                                   \
         __builtin_prefetch(p_ + 64);                                                              \
         if (sizeof(BvhNode) > 128) { /* BVH_WIDTH 8 */                                            \
@@ -228,8 +224,7 @@ __attribute__((always_inline)) inline bool bvh_hit_triangle(__global const float
         }                                                                                         \
     } while (0)
 #else
-#define BVH_PREFETCH(p, bytes)
-#define BVH_PREFETCH_NODE(node)
+#define BVH_PREFETCH_CHILD(p)
 #endif
 
 /* Pushes entry c_ at distance d_ onto the stack, keeping the entries pushed for the current
@@ -253,8 +248,8 @@ __attribute__((always_inline)) inline bool bvh_hit_triangle(__global const float
         BVH_PUSH_SORTED(c_, t_nears[lane]);                                                       \
         /* A node's lines, or as many of a leaf's triangles (up to 4 x 48 bytes from anywhere in \
          * a line): chosen without a branch, which whether a child is a leaf would mispredict. */ \
-        BVH_PREFETCH_NODE(c_ >= 0 ? (__global const char*)(nodes + c_)                           \
-                                  : (__global const char*)(tris + BVH_LEAF_FIRST(c_)));           \
+        BVH_PREFETCH_CHILD(c_ >= 0 ? (__global const char*)(nodes + c_)                          \
+                                   : (__global const char*)(tris + BVH_LEAF_FIRST(c_)));          \
     }
 
 /* occluded: child `lane` (one whose box the ray enters): a leaf is tested at once, an interior
@@ -266,7 +261,7 @@ __attribute__((always_inline)) inline bool bvh_hit_triangle(__global const float
             if (bvh_leaf_occluded(tris, cutouts, c_, &r, tmax)) return true;                      \
         } else {                                                                                  \
             stack_node[sp++] = c_;                                                                \
-            BVH_PREFETCH_NODE(nodes + c_);                                                        \
+            BVH_PREFETCH_CHILD(nodes + c_);                                                       \
         }                                                                                         \
     }
 
@@ -442,7 +437,6 @@ inline bool occluded(__global const BvhNode* nodes, __global const Triangle* tri
 #undef BVH_CLOSEST_LANE
 #undef BVH_ANY_LANE
 #undef BVH_ALL_LANES
-#undef BVH_PREFETCH
-#undef BVH_PREFETCH_NODE
+#undef BVH_PREFETCH_CHILD
 
 #endif
