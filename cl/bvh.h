@@ -155,7 +155,9 @@ __attribute__((always_inline)) inline bool bvh_hit_triangle(__global const float
     float e0 = p1x * p2y - p1y * p2x;
     float e1 = p2x * p0y - p2y * p0x;
     float e2 = p0x * p1y - p0y * p1x;
-    /* Which of them are negative, positive and zero, as bits of one vector compare each. */
+    /* Which of them are negative, positive and zero, as bits of one vector compare each: which
+     * signs a missed triangle's edge functions have is data that a branch per comparison
+     * mispredicted, while the one branch below, on whether the ray misses, is well predicted. */
     float4 e = (float4)(e0, e1, e2, e2);
     uint negative = bvh_mask_bits4(e < 0.0f), positive = bvh_mask_bits4(e > 0.0f);
 #ifdef cl_khr_fp64
@@ -269,17 +271,13 @@ __attribute__((always_inline)) inline bool bvh_hit_triangle(__global const float
  * with AVX (PoCL on such a CPU), one vmovmskps of the lanes' sign bits; elsewhere the lanes are
  * folded in halves, 7 more instructions a node visit that LLVM does not turn into it. */
 __attribute__((always_inline)) inline uint bvh_lane_bits(bvh_intn hit_mask) {
-#if BVH_WIDTH == 8 && defined(__AVX__)
+#if BVH_WIDTH == 4
+    return bvh_mask_bits4(hit_mask);
+#elif defined(__AVX__)
     return (uint)__builtin_ia32_movmskps256(as_float8(hit_mask));
-#elif BVH_WIDTH == 4 && defined(__SSE__)
-    return (uint)__builtin_ia32_movmskps(as_float4(hit_mask));
 #else
-#if BVH_WIDTH == 8
     uint8 bits = as_uint8(hit_mask) & (uint8)(1u, 2u, 4u, 8u, 16u, 32u, 64u, 128u);
     uint4 folded = bits.lo | bits.hi;
-#else
-    uint4 folded = as_uint4(hit_mask) & (uint4)(1u, 2u, 4u, 8u);
-#endif
     uint2 quarter = folded.lo | folded.hi;
     return quarter.x | quarter.y;
 #endif
