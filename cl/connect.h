@@ -83,7 +83,7 @@ inline float3 connect_bdpt(const SceneData* scene, const StrategyMix* mix, Rng* 
             sampled = vertex_at(VERTEX_CAMERA, lens_point, xyz(scene->camera->forward), 0.0f);
             sampled.beta = (float3)(we / pdf_w);
             L = qs->beta * vertex_f(scene, qs, &sampled, TRANSPORT_IMPORTANCE) * sampled.beta;
-            if (vertex_on_surface(qs)) L *= fabs(dot(wi, qs->ns));
+            L *= surface_cosine_or_one(qs, qs->ns, wi);
             L = connection_visibility(scene, rng, s, t, qs, &sampled, L, &to_qs, &to_pt);
         }
     } else if (s == 1) {
@@ -104,7 +104,7 @@ inline float3 connect_bdpt(const SceneData* scene, const StrategyMix* mix, Rng* 
             sampled.light = light;
             sampled.pdf_fwd = vertex_pdf_light_origin(scene, &sampled, pt);
             L = pt->beta * vertex_f(scene, pt, &sampled, TRANSPORT_RADIANCE) * sampled.beta;
-            if (vertex_on_surface(pt)) L *= fabs(dot(ls.wi, pt->ns));
+            L *= surface_cosine_or_one(pt, pt->ns, ls.wi);
             L = connection_visibility(scene, rng, s, t, pt, &sampled, L, &to_pt, &to_qs);
         }
     } else {

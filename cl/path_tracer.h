@@ -96,7 +96,7 @@ inline float3 path_tracer_light_sample(const SceneData* scene, const Rng* rng, i
     float3 f = surface_vertex_f(v, b, &sampled, TRANSPORT_RADIANCE, &wi);
 #endif
     float3 L = v->beta * f * sampled.beta;
-    if (vertex_on_surface(v)) L *= fabs(dot(ls.wi, v->ns));
+    L *= surface_cosine_or_one(v, v->ns, ls.wi);
 #ifdef HAS_MEDIA
     /* connect_bdpt's s = 1 with its stream: transmittance, and the distance densities. */
     if (is_black(L)) return (float3)(0.0f);
