@@ -16,14 +16,16 @@
  * map looks equally bumpy on any model size or texture scale. */
 #define BUMP_HEIGHT_IN_TEXELS 4.0f
 
-inline float3 bumped_normal(const SceneData* scene, __global const Triangle* tri, int triangle,
+inline float3 bumped_normal(const SceneData* scene, __global const TriangleRows* tri, int triangle,
                             __global const Material* m, float2 uv, float3 ns) {
     __global const TriangleUV* t_uv = &scene->uvs[triangle];
     float2 duv02 = (float2)(t_uv->u0 - t_uv->u2, t_uv->v0 - t_uv->v2);
     float2 duv12 = (float2)(t_uv->u1 - t_uv->u2, t_uv->v1 - t_uv->v2);
     float det = duv02.x * duv12.y - duv02.y * duv12.x;
     if (!(fabs(det) > 0.0f)) return ns; /* no usable parameterisation (e.g. no texture coordinates) */
-    float3 dp02 = xyz(tri->p0) - xyz(tri->p2), dp12 = xyz(tri->p1) - xyz(tri->p2);
+    float3 p0, p1, p2;
+    triangle_corners(tri, &p0, &p1, &p2);
+    float3 dp02 = p0 - p2, dp12 = p1 - p2;
     float3 dpdu = (duv12.y * dp02 - duv02.y * dp12) / det;
     float3 dpdv = (duv02.x * dp12 - duv12.x * dp02) / det;
 

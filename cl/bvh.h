@@ -125,63 +125,55 @@ __attribute__((always_inline)) inline uint bvh_mask_bits4(int4 mask) {
 #endif
 }
 
-/* Watertight ray-triangle test (Woop et al. 2013; pbrt-v3 Triangle::Intersect, float version).
- * v: the triangle's 12 floats (p0, p1, p2 as float4). On a hit with t in (0, tmax) returns true
- * and sets *t and the barycentrics of p1 and p2. Hits whose t could be 0 or less through
- * rounding do not count; with below_tmax set, neither do those whose t could be tmax or more
- * (visibility between two points: the far point's own surface, just beyond tmax, must not
- * block). A ray through an edge or a vertex (an edge function exactly 0) hits every triangle
+/* Watertight ray-triangle test (Woop et al. 2013; pbrt-v3 Triangle::Intersect, float version)
+ * on a triangle stored by rows (cl/shared/types.h): the steps work on the three corners at
+ * once, lane i holding corner i, with the scalar test's operations in each lane. On a hit with
+ * t in (0, tmax) returns true and sets *t and the barycentrics of p1 and p2. Hits whose t
+ * could be 0 or less through rounding do not count; with below_tmax set, neither do those
+ * whose t could be tmax or more (visibility between two points: the far point's own surface,
+ * just beyond tmax, must not block). A ray through an edge or a vertex (an edge function exactly 0) hits every triangle
  * sharing it, which is what makes the test watertight. */
-__attribute__((always_inline)) inline bool bvh_hit_triangle(__global const float* v, const BvhRay* r, float tmax,
-                                                            bool below_tmax, float* t_out, float* b1_out,
+__attribute__((always_inline)) inline bool bvh_hit_triangle(__global const TriangleRows* tri, const BvhRay* r,
+                                                            float tmax, bool below_tmax, float* t_out, float* b1_out,
                                                             float* b2_out) {
     /* Watertightness needs both triangles sharing an edge to compute its edge function the
      * same way up to sign: a*b - c*d contracted to fma(a, b, -c*d) is not antisymmetric in
      * its operands and could make both reject a ray through the edge. (Scoped to this
      * function: the rest of the kernel may contract.) */
 #pragma OPENCL FP_CONTRACT OFF
-    /* Translate to the ray origin, permute so the ray runs along z, shear to make it (0, 0, 1). */
-    float p0z = v[r->kz] - r->okz;
-    float p1z = v[4 + r->kz] - r->okz;
-    float p2z = v[8 + r->kz] - r->okz;
-    float p0x = v[r->kx] - r->okx + r->sx * p0z;
-    float p0y = v[r->ky] - r->oky + r->sy * p0z;
-    float p1x = v[4 + r->kx] - r->okx + r->sx * p1z;
-    float p1y = v[4 + r->ky] - r->oky + r->sy * p1z;
-    float p2x = v[8 + r->kx] - r->okx + r->sx * p2z;
-    float p2y = v[8 + r->ky] - r->oky + r->sy * p2z;
+    /* Translate to the ray origin, permute so the ray runs along z, shear to make it (0, 0, 1):
+     * one row per axis (lane 3, the normal's, is carried along unread). */
+    float4 pz = tri->row[r->kz] - r->okz;
+    float4 px = tri->row[r->kx] - r->okx + r->sx * pz;
+    float4 py = tri->row[r->ky] - r->oky + r->sy * pz;
 
-    /* Edge functions: twice the signed areas of the sub-triangles opposite each vertex. */
-    float e0 = p1x * p2y - p1y * p2x;
-    float e1 = p2x * p0y - p2y * p0x;
-    float e2 = p0x * p1y - p0y * p1x;
-    /* Which of them are negative, positive and zero, as bits of one vector compare each: which
-     * signs a missed triangle's edge functions have is data that a branch per comparison
-     * mispredicted, while the one branch below, on whether the ray misses, is well predicted. */
-    float4 e = (float4)(e0, e1, e2, e2);
+    /* Edge functions, twice the signed areas of the sub-triangles opposite each corner:
+     * e0 = p1x p2y - p1y p2x, e1 = p2x p0y - p2y p0x, e2 = p0x p1y - p0y p1x, and e2 again in
+     * lane 3 so that the sign masks below see three edges. Which of them are negative,
+     * positive and zero come as bits of one vector compare each: which signs a missed
+     * triangle's edge functions have is data that a branch per comparison mispredicted, while
+     * the one branch below, on whether the ray misses, is well predicted. */
+    float4 e = px.yzxx * py.zxyy - py.yzxx * px.zxyy;
     uint negative = bvh_mask_bits4(e < 0.0f), positive = bvh_mask_bits4(e > 0.0f);
 #ifdef cl_khr_fp64
     /* An edge function of exactly 0 may be a rounding artefact: redo it in double, where the
      * float products are exact, so its sign is the exact one (Woop et al. section 3.2). */
     if (bvh_mask_bits4(e == 0.0f) != 0u) {
-        e0 = (float)((double)p1x * (double)p2y - (double)p1y * (double)p2x);
-        e1 = (float)((double)p2x * (double)p0y - (double)p2y * (double)p0x);
-        e2 = (float)((double)p0x * (double)p1y - (double)p0y * (double)p1x);
-        e = (float4)(e0, e1, e2, e2);
+        double4 dx = convert_double4(px), dy = convert_double4(py);
+        e = convert_float4(dx.yzxx * dy.zxyy - dy.yzxx * dx.zxyy);
         negative = bvh_mask_bits4(e < 0.0f);
         positive = bvh_mask_bits4(e > 0.0f);
     }
 #endif
     /* Inside iff no two edge functions have opposite signs (zeros count as inside). */
     if ((negative != 0u) & (positive != 0u)) return false;
-    float det = e0 + e1 + e2;
+    float det = e.x + e.y + e.z;
     if (det == 0.0f) return false; /* the ray lies in the triangle's plane */
 
     /* Scaled distance t * det, compared with the range (0, tmax) without dividing. */
-    p0z *= r->sz;
-    p1z *= r->sz;
-    p2z *= r->sz;
-    float t_scaled = e0 * p0z + e1 * p1z + e2 * p2z;
+    pz *= r->sz;
+    float4 ez = e * pz;
+    float t_scaled = ez.x + ez.y + ez.z;
     if (det < 0.0f ? (t_scaled >= 0.0f || t_scaled <= tmax * det) : (t_scaled <= 0.0f || t_scaled >= tmax * det))
         return false;
     float inv_det = 1.0f / det;
@@ -189,20 +181,21 @@ __attribute__((always_inline)) inline bool bvh_hit_triangle(__global const float
 
     /* Make sure t is conservatively greater than zero (pbrt-v3 section 3.9.6): reject hits
      * whose t could be positive only through rounding. */
-    float max_zt = max(max(fabs(p0z), fabs(p1z)), fabs(p2z));
+    float4 az = fabs(pz), ax = fabs(px), ay = fabs(py), ae = fabs(e);
+    float max_zt = max(max(az.x, az.y), az.z);
     float delta_z = FLOAT_GAMMA(3) * max_zt;
-    float max_xt = max(max(fabs(p0x), fabs(p1x)), fabs(p2x));
-    float max_yt = max(max(fabs(p0y), fabs(p1y)), fabs(p2y));
+    float max_xt = max(max(ax.x, ax.y), ax.z);
+    float max_yt = max(max(ay.x, ay.y), ay.z);
     float delta_x = FLOAT_GAMMA(5) * (max_xt + max_zt);
     float delta_y = FLOAT_GAMMA(5) * (max_yt + max_zt);
     float delta_e = 2.0f * (FLOAT_GAMMA(2) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
-    float max_e = max(max(fabs(e0), fabs(e1)), fabs(e2));
+    float max_e = max(max(ae.x, ae.y), ae.z);
     float delta_t = 3.0f * (FLOAT_GAMMA(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) * fabs(inv_det);
     if (t <= delta_t || (below_tmax && t >= tmax - delta_t)) return false;
 
     *t_out = t;
-    *b1_out = e1 * inv_det;
-    *b2_out = e2 * inv_det;
+    *b1_out = e.y * inv_det;
+    *b2_out = e.z * inv_det;
     return true;
 }
 
@@ -308,7 +301,7 @@ __attribute__((always_inline)) inline int bvh_lowest_lane(uint bits) {
  * BVH_COUNT_VISITS (a diagnostic build, traversal_bench --count-visits) returns the numbers of
  * nodes visited and triangles tested in hit->b1 and hit->b2 instead of the barycentrics. */
 __attribute__((always_inline)) inline bool intersect_closest(__global const BvhNode* nodes,
-                                                             __global const Triangle* tris, const Cutouts* cutouts,
+                                                             __global const TriangleRows* tris, const Cutouts* cutouts,
                                                              float3 o, float3 d, float tmax, bool exclude_end,
                                                              Hit* hit) {
     BvhRay r = bvh_ray(o, d);
@@ -347,11 +340,11 @@ __attribute__((always_inline)) inline bool intersect_closest(__global const BvhN
             for (int i = first; i < end; ++i) {
                 float t, b1, b2;
                 BVH_COUNT(triangles_tested);
-                if (bvh_hit_triangle((__global const float*)(tris + i), &r, hit->t, false, &t, &b1, &b2)) {
+                if (bvh_hit_triangle(tris + i, &r, hit->t, false, &t, &b1, &b2)) {
 #ifdef HAS_CUTOUTS
                     if (cutouts && cutout_hides(cutouts, i, b1, b2)) continue;
 #endif
-                    if (exclude_end && !bvh_hit_triangle((__global const float*)(tris + i), &r, tmax, true, &t, &b1, &b2))
+                    if (exclude_end && !bvh_hit_triangle(tris + i, &r, tmax, true, &t, &b1, &b2))
                         continue;
                     hit->t = t;
                     hit->b1 = b1;
@@ -376,24 +369,24 @@ __attribute__((always_inline)) inline bool intersect_closest(__global const BvhN
     }
 }
 
-inline bool intersect(__global const BvhNode* nodes, __global const Triangle* tris, const Cutouts* cutouts,
+inline bool intersect(__global const BvhNode* nodes, __global const TriangleRows* tris, const Cutouts* cutouts,
                       float3 o, float3 d, float tmax, Hit* hit) {
     return intersect_closest(nodes, tris, cutouts, o, d, tmax, false, hit);
 }
 
 /* The closest hit on the open segment from o to o + d, its ends' surfaces excluded as in
  * occluded (t in units of |d|, so tmax = 1). */
-inline bool intersect_segment(__global const BvhNode* nodes, __global const Triangle* tris, const Cutouts* cutouts,
+inline bool intersect_segment(__global const BvhNode* nodes, __global const TriangleRows* tris, const Cutouts* cutouts,
                               float3 o, float3 d, Hit* hit) {
     return intersect_closest(nodes, tris, cutouts, o, d, 1.0f, true, hit);
 }
 
-__attribute__((always_inline)) inline bool bvh_leaf_occluded(__global const Triangle* tris, const Cutouts* cutouts,
+__attribute__((always_inline)) inline bool bvh_leaf_occluded(__global const TriangleRows* tris, const Cutouts* cutouts,
                                                              int leaf, const BvhRay* r, float tmax) {
     int first = BVH_LEAF_FIRST(leaf), end = first + BVH_LEAF_COUNT(leaf);
     for (int i = first; i < end; ++i) {
         float t, b1, b2;
-        if (bvh_hit_triangle((__global const float*)(tris + i), r, tmax, true, &t, &b1, &b2)) {
+        if (bvh_hit_triangle(tris + i, r, tmax, true, &t, &b1, &b2)) {
 #ifdef HAS_CUTOUTS
             if (cutouts && cutout_hides(cutouts, i, b1, b2)) continue;
 #endif
@@ -414,7 +407,7 @@ __attribute__((always_inline)) inline bool bvh_leaf_occluded(__global const Tria
  * 300k triangles, CPU time relative to Embree in the same run: shadow rays to a light 0.83-0.88
  * sorted, 0.97-1.00 unsorted; connections 0.60-0.65 and 0.63-0.71; random any-hit 1.09-1.17 and
  * 1.16-1.18). */
-inline bool occluded(__global const BvhNode* nodes, __global const Triangle* tris, const Cutouts* cutouts,
+inline bool occluded(__global const BvhNode* nodes, __global const TriangleRows* tris, const Cutouts* cutouts,
                      float3 o, float3 d, float tmax) {
     BvhRay r = bvh_ray(o, d);
     int stack_node[BVH_STACK_SIZE];

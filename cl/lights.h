@@ -47,24 +47,36 @@ inline int light_is_infinite(int kind) { return kind == LIGHT_ENVIRONMENT || kin
 
 /* ---- Area lights ----------------------------------------------------------------------- */
 
-/* The unit geometric normal, front face counter-clockwise (stored in the corners' w lanes). */
-inline float3 triangle_normal(__global const Triangle* tri) { return (float3)(tri->p0.w, tri->p1.w, tri->p2.w); }
+/* The unit geometric normal, front face counter-clockwise (stored in the rows' w lanes). */
+inline float3 triangle_normal(__global const TriangleRows* tri) {
+    return (float3)(tri->row[0].w, tri->row[1].w, tri->row[2].w);
+}
+
+/* The three corners of a triangle stored by rows (cl/shared/types.h). */
+inline void triangle_corners(__global const TriangleRows* tri, float3* p0, float3* p1, float3* p2) {
+    float4 x = tri->row[0], y = tri->row[1], z = tri->row[2];
+    *p0 = (float3)(x.s0, y.s0, z.s0);
+    *p1 = (float3)(x.s1, y.s1, z.s1);
+    *p2 = (float3)(x.s2, y.s2, z.s2);
+}
 
 /* The point of barycentrics b (of p1 and p2) as p0 + b1 (p1 - p0) + b2 (p2 - p0): an affine
  * combination whatever the rounding of b, so its only error off the plane is the rounding of
  * these few operations, bounded by triangle_point_error. */
-inline float3 triangle_point(__global const Triangle* tri, float2 b) {
-    float3 p0 = xyz(tri->p0);
-    return p0 + (xyz(tri->p1) - p0) * b.x + (xyz(tri->p2) - p0) * b.y;
+inline float3 triangle_point(__global const TriangleRows* tri, float2 b) {
+    float3 p0, p1, p2;
+    triangle_corners(tri, &p0, &p1, &p2);
+    return p0 + (p1 - p0) * b.x + (p2 - p0) * b.y;
 }
 
 /* A bound on the distance of triangle_point(tri, b) from the triangle's plane, along its unit
  * normal n: each coordinate is off by at most gamma(4) (|p0| + |b1 e1| + |b2 e2|) (the edge
  * e1 = p1 - p0 rounded once, its product with b1 once, two sums; pbrt-v3 eq. 3.15 bounds the
  * form b0 p0 + b1 p1 + b2 p2 likewise, with gamma(7)). */
-inline float triangle_point_error(__global const Triangle* tri, float2 b, float3 n) {
-    float3 p0 = xyz(tri->p0);
-    float3 magnitude = fabs(p0) + fabs((xyz(tri->p1) - p0) * b.x) + fabs((xyz(tri->p2) - p0) * b.y);
+inline float triangle_point_error(__global const TriangleRows* tri, float2 b, float3 n) {
+    float3 p0, p1, p2;
+    triangle_corners(tri, &p0, &p1, &p2);
+    float3 magnitude = fabs(p0) + fabs((p1 - p0) * b.x) + fabs((p2 - p0) * b.y);
     return FLOAT_GAMMA(4) * dot(fabs(n), magnitude);
 }
 
@@ -346,7 +358,7 @@ inline int light_sample_li(const SceneData* scene, int index, float3 ref, float2
     switch (light->kind) {
 #ifdef HAS_AREA_LIGHTS
     case LIGHT_AREA: {
-        __global const Triangle* tri = &scene->triangles[light->triangle];
+        __global const TriangleRows* tri = &scene->triangles[light->triangle];
         float2 b = sample_uniform_triangle(u);
         ls->p = triangle_point(tri, b);
         ls->n = triangle_normal(tri);
@@ -432,7 +444,7 @@ inline int light_sample_le(const SceneData* scene, int index, float2 u_pos, floa
     switch (light->kind) {
 #ifdef HAS_AREA_LIGHTS
     case LIGHT_AREA: {
-        __global const Triangle* tri = &scene->triangles[light->triangle];
+        __global const TriangleRows* tri = &scene->triangles[light->triangle];
         float2 b = sample_uniform_triangle(u_pos);
         er->origin = triangle_point(tri, b);
         er->n = triangle_normal(tri);

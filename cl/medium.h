@@ -144,7 +144,7 @@ inline float3 beer_lambert(float3 sigma, float t) {
 /* Moves a ray off an index-matched boundary it hit: into the medium beyond, from the far side
  * of the hit point's error bound. */
 inline void cross_interface(const SceneData* scene, const Hit* hit, float3 d, float3* o, int* medium) {
-    __global const Triangle* tri = &scene->triangles[hit->triangle];
+    __global const TriangleRows* tri = &scene->triangles[hit->triangle];
     float2 b = (float2)(hit->b1, hit->b2);
     float3 ng = triangle_normal(tri);
     *medium = medium_beyond(scene, scene->infos[hit->triangle].material, ng, d);

@@ -9,7 +9,7 @@
 
 typedef struct {
     __global const BvhNode* nodes;
-    __global const Triangle* triangles;
+    __global const TriangleRows* triangles;
     __global const TriangleInfo* infos;
     __global const TriangleNormals* normals;
     __global const Material* materials;
@@ -43,7 +43,7 @@ typedef struct {
 /* The kernel arguments every light-transport kernel takes, in this order (the host sets them
  * in host/render/renderer.cpp). */
 #define SCENE_KERNEL_ARGS                                                                              \
-    __global const BvhNode *nodes, __global const Triangle *triangles, __global const TriangleInfo *infos, \
+    __global const BvhNode *nodes, __global const TriangleRows *triangles, __global const TriangleInfo *infos, \
         __global const TriangleNormals *normals, __global const Material *materials,                    \
         __global const Light *lights, __global const float *light_cdf, __global const float4 *env_texels, \
         __global const float *env_distribution, __global const TriangleUV *uvs,                         \
@@ -54,7 +54,7 @@ typedef struct {
     scene_data(nodes, triangles, infos, normals, materials, lights, light_cdf, env_texels, env_distribution, \
                uvs, texture_infos, texels, media, densities, &camera, &info, rays)
 
-inline SceneData scene_data(__global const BvhNode* nodes, __global const Triangle* triangles,
+inline SceneData scene_data(__global const BvhNode* nodes, __global const TriangleRows* triangles,
                             __global const TriangleInfo* infos, __global const TriangleNormals* normals,
                             __global const Material* materials, __global const Light* lights,
                             __global const float* light_cdf, __global const float4* env_texels,

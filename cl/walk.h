@@ -21,7 +21,7 @@
 
 /* Fills a surface vertex from a hit of a ray that left `prev`. */
 inline void surface_vertex_from_hit(const SceneData* scene, const PathVertex* prev, const Hit* hit, PathVertex* v) {
-    __global const Triangle* tri = &scene->triangles[hit->triangle];
+    __global const TriangleRows* tri = &scene->triangles[hit->triangle];
     TriangleInfo info = scene->infos[hit->triangle];
     float2 b = (float2)(hit->b1, hit->b2);
     float3 ng = triangle_normal(tri);

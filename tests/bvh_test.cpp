@@ -14,6 +14,7 @@
 
 #include "bvh/bvh.h"
 #include "device/opencl.h"
+#include "render/device_scene.h"
 
 namespace clbdpt {
 namespace {
@@ -142,9 +143,9 @@ public:
         nodes_buf_ = cl::Buffer(ctx.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR,
                                 bvh_.nodes.size() * sizeof(BvhNode), bvh_.nodes.data());
         // A zero-sized buffer is invalid in OpenCL: give an empty scene one unused triangle.
-        std::vector<Triangle> upload = tris_.empty() ? std::vector<Triangle>(1) : tris_;
+        std::vector<TriangleRows> upload = triangle_rows(tris_.empty() ? std::vector<Triangle>(1) : tris_);
         tris_buf_ = cl::Buffer(ctx.context(), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR,
-                               upload.size() * sizeof(Triangle), upload.data());
+                               upload.size() * sizeof(TriangleRows), upload.data());
     }
 
     const Bvh& bvh() const { return bvh_; }

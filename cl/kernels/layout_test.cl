@@ -8,6 +8,7 @@
 #define CLBDPT_LAYOUT_LIST(S, F)                                                                  \
     S(BvhNode) F(BvhNode, bounds) F(BvhNode, child) F(BvhNode, pad)                                \
     S(Triangle) F(Triangle, p0) F(Triangle, p1) F(Triangle, p2)                                   \
+    S(TriangleRows) F(TriangleRows, row)                                                          \
     S(TriangleInfo) F(TriangleInfo, material) F(TriangleInfo, light) F(TriangleInfo, normals)     \
         F(TriangleInfo, source_index)                                                             \
     S(TriangleNormals) F(TriangleNormals, n0) F(TriangleNormals, n1) F(TriangleNormals, n2)       \

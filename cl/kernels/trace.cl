@@ -6,7 +6,7 @@
 
 /* Closest hit. ray_o: origin, w = tmax; ray_d: direction (w unused). out: (t, b1, b2,
  * as_float(triangle)), triangle = -1 and t = tmax on a miss. */
-__kernel void trace_closest(__global const BvhNode* nodes, __global const Triangle* tris,
+__kernel void trace_closest(__global const BvhNode* nodes, __global const TriangleRows* tris,
                             __global const float4* ray_o, __global const float4* ray_d,
                             __global float4* out, int count) {
     int i = get_global_id(0);
@@ -19,7 +19,7 @@ __kernel void trace_closest(__global const BvhNode* nodes, __global const Triang
 }
 
 /* Any hit: occluded[i] = 1 if something is hit with t in (0, tmax), else 0. */
-__kernel void trace_any(__global const BvhNode* nodes, __global const Triangle* tris,
+__kernel void trace_any(__global const BvhNode* nodes, __global const TriangleRows* tris,
                         __global const float4* ray_o, __global const float4* ray_d,
                         __global int* occluded_out, int count) {
     int i = get_global_id(0);

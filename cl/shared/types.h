@@ -43,6 +43,14 @@ typedef struct {
     clbdpt_float4 p0, p1, p2;
 } Triangle;
 
+/* The device's copy of a Triangle, transposed (triangle_rows, host/render/scene_buffers.cpp):
+ * row k = (p0[k], p1[k], p2[k], n[k]), the corners' coordinate k and the normal's. The
+ * watertight test permutes the axes per ray (cl/bvh.h), and a row by index is one vector load
+ * that holds all three corners, where corners by index took nine scalar loads. */
+typedef struct {
+    clbdpt_float4 row[3];
+} TriangleRows;
+
 /* Per-triangle attributes, same order as Triangle. */
 typedef struct {
     clbdpt_int material;     /* index into the material array */

@@ -46,6 +46,7 @@
 
 #include "bvh/bvh.h"
 #include "device/opencl.h"
+#include "render/device_scene.h"
 #include "scene/scene.h"
 #include "util/error.h"
 #include "util/vec3.h"
@@ -319,7 +320,8 @@ public:
              bool count_visits)
         : ctx_(ctx), local_(local) {
         nodes_ = upload(bvh.nodes.data(), bvh.nodes.size() * sizeof(BvhNode), huge_pages, &nodes_memory_);
-        tris_ = upload(tris.data(), tris.size() * sizeof(Triangle), huge_pages, &tris_memory_);
+        const std::vector<TriangleRows> rows = triangle_rows(tris);
+        tris_ = upload(rows.data(), rows.size() * sizeof(TriangleRows), huge_pages, &tris_memory_);
         const cl::Program& program = ctx.program("kernels/trace.cl", {}).program;
         closest_ = cl::Kernel(program, "trace_closest");
         any_ = cl::Kernel(program, "trace_any");

@@ -35,6 +35,9 @@ CLBDPT_CHECK_FIELD(Triangle, p0, 0);
 CLBDPT_CHECK_FIELD(Triangle, p1, 16);
 CLBDPT_CHECK_FIELD(Triangle, p2, 32);
 
+CLBDPT_CHECK_STRUCT(TriangleRows, 48, 16);
+CLBDPT_CHECK_FIELD(TriangleRows, row, 0);
+
 CLBDPT_CHECK_STRUCT(TriangleInfo, 16, 4);
 CLBDPT_CHECK_FIELD(TriangleInfo, material, 0);
 CLBDPT_CHECK_FIELD(TriangleInfo, light, 4);

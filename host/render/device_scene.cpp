@@ -31,6 +31,18 @@ void store_triangle_normals(std::vector<Triangle>& triangles) {
     }
 }
 
+std::vector<TriangleRows> triangle_rows(const std::vector<Triangle>& triangles) {
+    std::vector<TriangleRows> rows(triangles.size());
+    for (size_t i = 0; i < triangles.size(); ++i) {
+        const cl_float4* corner[3] = {&triangles[i].p0, &triangles[i].p1, &triangles[i].p2};
+        for (int k = 0; k < 3; ++k) {
+            for (int c = 0; c < 3; ++c) rows[i].row[k].s[c] = corner[c]->s[k];
+            rows[i].row[k].s[3] = corner[k]->s[3]; // the normal's coordinate k (store_triangle_normals)
+        }
+    }
+    return rows;
+}
+
 namespace {
 
 constexpr float kPi = 3.14159265358979323846f;

@@ -76,6 +76,10 @@ Vec3 vec3_of(const cl_float4& v);
 // Writes each triangle's unit geometric normal into its corners' w lanes (cl/shared/types.h).
 void store_triangle_normals(std::vector<Triangle>& triangles);
 
+// The triangles as the device stores them (TriangleRows, cl/shared/types.h): transposed, row k
+// holding the corners' coordinate k and the normal's.
+std::vector<TriangleRows> triangle_rows(const std::vector<Triangle>& triangles);
+
 // Appends to `buffer` the guide of the CDF of n intervals at buffer[cdf_offset ..], as
 // find_interval_guided (cl/sampling.h) reads it: g + 1 entries, entry k the interval holding
 // k / g (the last interval whose CDF value is at most k / g), ints stored as float bits.
