@@ -131,8 +131,8 @@ __attribute__((always_inline)) inline uint bvh_mask_bits4(int4 mask) {
  * t in (0, tmax) returns true and sets *t and the barycentrics of p1 and p2. Hits whose t
  * could be 0 or less through rounding do not count; with below_tmax set, neither do those
  * whose t could be tmax or more (visibility between two points: the far point's own surface,
- * just beyond tmax, must not block). A ray through an edge or a vertex (an edge function exactly 0) hits every triangle
- * sharing it, which is what makes the test watertight. */
+ * just beyond tmax, must not block). A ray through an edge or a vertex (an edge function
+ * exactly 0) hits every triangle sharing it, which is what makes the test watertight. */
 __attribute__((always_inline)) inline bool bvh_hit_triangle(__global const TriangleRows* tri, const BvhRay* r,
                                                             float tmax, bool below_tmax, float* t_out, float* b1_out,
                                                             float* b2_out) {

@@ -72,6 +72,21 @@ TEST(Geometry, TrianglesCarryTheirUnitNormal) {
     }
 }
 
+// The device's copy (TriangleRows) is the transpose: row k holds the corners' coordinate k in
+// lanes 0-2 and the normal's in lane 3, bit for bit what the corners held.
+TEST(Geometry, DeviceTrianglesAreTheTransposedCorners) {
+    const std::vector<Triangle>& corners = box().ds.triangles;
+    const std::vector<TriangleRows> rows = triangle_rows(corners);
+    ASSERT_EQ(rows.size(), corners.size());
+    for (size_t i = 0; i < corners.size(); ++i) {
+        const cl_float4* corner[3] = {&corners[i].p0, &corners[i].p1, &corners[i].p2};
+        for (int k = 0; k < 3; ++k) {
+            for (int c = 0; c < 3; ++c) EXPECT_EQ(rows[i].row[k].s[c], corner[c]->s[k]) << i << " " << k << " " << c;
+            EXPECT_EQ(rows[i].row[k].s[3], corner[k]->s[3]) << i << " normal " << k;
+        }
+    }
+}
+
 // ---- convert_density ---------------------------------------------------------------------------
 
 // ~6 float operations on values of order 1: 1e-5 of pdf / d^2 (the cosine is a float dot product

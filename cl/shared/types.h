@@ -35,18 +35,19 @@ typedef struct {
  * tree needs more. */
 #define BVH_STACK_SIZE 64
 
-/* Triangle corners in BVH order. The w lanes hold the unit geometric normal, normalize((p1 - p0)
- * x (p2 - p0)) computed in double on the host (p0.w, p1.w, p2.w = x, y, z; host/render/
- * device_scene.cpp): every hit and every area-light sample needs it, and the lanes are loaded
- * with the corners anyway. Traversal reads xyz only. */
+/* Triangle corners in BVH order, as the host keeps them (the device's copy is TriangleRows,
+ * below). The w lanes hold the unit geometric normal, normalize((p1 - p0) x (p2 - p0))
+ * computed in double on the host (p0.w, p1.w, p2.w = x, y, z; host/render/device_scene.cpp):
+ * every hit and every area-light sample needs it, and the lanes are loaded with the corners
+ * anyway. */
 typedef struct {
     clbdpt_float4 p0, p1, p2;
 } Triangle;
 
-/* The device's copy of a Triangle, transposed (triangle_rows, host/render/scene_buffers.cpp):
- * row k = (p0[k], p1[k], p2[k], n[k]), the corners' coordinate k and the normal's. The
- * watertight test permutes the axes per ray (cl/bvh.h), and a row by index is one vector load
- * that holds all three corners, where corners by index took nine scalar loads. */
+/* The device's copy of a Triangle, transposed at the upload (triangle_rows, host/render/
+ * device_scene.cpp): row k = (p0[k], p1[k], p2[k], n[k]), the corners' coordinate k and the
+ * normal's. The watertight test permutes the axes per ray (cl/bvh.h), and a row by index is
+ * one vector load that holds all three corners, where corners by index took nine scalar loads. */
 typedef struct {
     clbdpt_float4 row[3];
 } TriangleRows;

@@ -64,8 +64,9 @@ void check_scene_fits_device(const DeviceScene& s, const DeviceEntry& device) {
 
 SceneBuffers::SceneBuffers(cl::Context& context, const DeviceScene& scene) : scene_(scene) {
     // The triangles go up transposed (TriangleRows): a copy for the upload's moment only.
-    buffers_ = {upload(context, scene.nodes),     upload(context, triangle_rows(scene.triangles)), upload(context, scene.infos),
-                upload(context, scene.normals),   upload(context, scene.materials), upload(context, scene.lights),
+    buffers_ = {upload(context, scene.nodes),     upload(context, triangle_rows(scene.triangles)),
+                upload(context, scene.infos),     upload(context, scene.normals),
+                upload(context, scene.materials), upload(context, scene.lights),
                 upload(context, scene.light_cdf), upload(context, scene.env_texels),
                 upload(context, scene.env_distribution), upload(context, scene.uvs),
                 upload(context, scene.textures),  upload(context, scene.texels),
