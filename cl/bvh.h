@@ -125,6 +125,11 @@ __attribute__((always_inline)) inline uint bvh_mask_bits4(int4 mask) {
 #endif
 }
 
+/* The largest of lanes 0-2, and their sum in the order (x + y) + z: the triangle test's
+ * reductions over a triangle's three corners (lane 3 is not one). */
+__attribute__((always_inline)) inline float bvh_max3(float4 v) { return max(max(v.x, v.y), v.z); }
+__attribute__((always_inline)) inline float bvh_sum3(float4 v) { return v.x + v.y + v.z; }
+
 /* Watertight ray-triangle test (Woop et al. 2013; pbrt-v3 Triangle::Intersect, float version)
  * on a triangle stored by rows (cl/shared/types.h): the steps work on the three corners at
  * once, lane i holding corner i, with the scalar test's operations in each lane. On a hit with
@@ -167,13 +172,12 @@ __attribute__((always_inline)) inline bool bvh_hit_triangle(__global const Trian
 #endif
     /* Inside iff no two edge functions have opposite signs (zeros count as inside). */
     if ((negative != 0u) & (positive != 0u)) return false;
-    float det = e.x + e.y + e.z;
+    float det = bvh_sum3(e);
     if (det == 0.0f) return false; /* the ray lies in the triangle's plane */
 
     /* Scaled distance t * det, compared with the range (0, tmax) without dividing. */
     pz *= r->sz;
-    float4 ez = e * pz;
-    float t_scaled = ez.x + ez.y + ez.z;
+    float t_scaled = bvh_sum3(e * pz);
     if (det < 0.0f ? (t_scaled >= 0.0f || t_scaled <= tmax * det) : (t_scaled <= 0.0f || t_scaled >= tmax * det))
         return false;
     float inv_det = 1.0f / det;
@@ -181,15 +185,14 @@ __attribute__((always_inline)) inline bool bvh_hit_triangle(__global const Trian
 
     /* Make sure t is conservatively greater than zero (pbrt-v3 section 3.9.6): reject hits
      * whose t could be positive only through rounding. */
-    float4 az = fabs(pz), ax = fabs(px), ay = fabs(py), ae = fabs(e);
-    float max_zt = max(max(az.x, az.y), az.z);
+    float max_zt = bvh_max3(fabs(pz));
     float delta_z = FLOAT_GAMMA(3) * max_zt;
-    float max_xt = max(max(ax.x, ax.y), ax.z);
-    float max_yt = max(max(ay.x, ay.y), ay.z);
+    float max_xt = bvh_max3(fabs(px));
+    float max_yt = bvh_max3(fabs(py));
     float delta_x = FLOAT_GAMMA(5) * (max_xt + max_zt);
     float delta_y = FLOAT_GAMMA(5) * (max_yt + max_zt);
     float delta_e = 2.0f * (FLOAT_GAMMA(2) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
-    float max_e = max(max(ae.x, ae.y), ae.z);
+    float max_e = bvh_max3(fabs(e));
     float delta_t = 3.0f * (FLOAT_GAMMA(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) * fabs(inv_det);
     if (t <= delta_t || (below_tmax && t >= tmax - delta_t)) return false;
 
